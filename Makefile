@@ -1,0 +1,65 @@
+# radiosity — see README.md. `make check` installs what is missing, builds
+# and runs every test; `make demo` renders a shipped scene.
+CXX      ?= g++
+PREFIX   ?= /usr/local
+DESTDIR  ?=
+PKGS     := glm stb
+CXXFLAGS ?= -O2 -g
+CXXFLAGS += -std=c++17 -Wall -Wextra -MMD -MP
+CPPFLAGS += $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
+LDLIBS   += $(shell pkg-config --libs $(PKGS) 2>/dev/null) -lpthread
+B        := build
+
+# Everything but main(): linked into the program and into the unit tests.
+LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp master.cpp results.cpp image.cpp
+TEST_SRCS := $(wildcard tests/*_test.cpp)
+LIB_OBJS  := $(LIB_SRCS:%.cpp=$(B)/%.o)
+TEST_OBJS := $(TEST_SRCS:tests/%.cpp=$(B)/tests/%.o)
+
+all: radiosity
+
+radiosity: $(B)/radiosity.o $(LIB_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(B)/unit_tests: $(TEST_OBJS) $(LIB_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS) $(shell pkg-config --libs gtest_main)
+
+$(B)/%.o: %.cpp | $(B)
+	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c -o $@ $<
+
+$(B)/tests/%.o: tests/%.cpp | $(B)
+	$(CXX) $(CPPFLAGS) -I. $(shell pkg-config --cflags gtest) $(CXXFLAGS) -c -o $@ $<
+
+$(B):
+	mkdir -p $(B)/tests
+
+# Installs the Debian packages the build and the tests need, only if some
+# are missing (the check is dpkg's, so a machine that has them all is left
+# alone and needs no network).
+deps:
+	@sh tests/deps.sh
+
+check: deps
+	@$(MAKE) --no-print-directory radiosity $(B)/unit_tests
+	@sh tests/run.sh
+
+demo: deps
+	@$(MAKE) --no-print-directory radiosity
+	./radiosity -o out/cornell scenes/cornell.obj
+	@echo "pictures and results: $(CURDIR)/out/cornell (final.png, result.csv, log.csv, result.ply)"
+
+bench: deps
+	@$(MAKE) --no-print-directory radiosity
+	@sh bench/run.sh
+
+install: radiosity
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/share/man/man1
+	install -m 755 radiosity $(DESTDIR)$(PREFIX)/bin/radiosity
+	install -m 644 man/radiosity.1 $(DESTDIR)$(PREFIX)/share/man/man1/radiosity.1
+
+clean:
+	rm -rf $(B) radiosity out
+
+.PHONY: all deps check demo bench install clean
+
+-include $(wildcard $(B)/*.d $(B)/tests/*.d)

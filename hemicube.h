@@ -1,0 +1,63 @@
+// One column of form factors: from a shooter patch's centre to every leaf
+// element, by the hemicube (Cohen & Greenberg 1985): a top face and four
+// half side faces, delta form factors per pixel, an item buffer of element
+// ids with a depth test.
+//
+// Numbers: the shooter's frame and the delta form factors are set up in
+// double; vertices are projected and rasterised in float after being moved
+// into the shooter's frame (relative coordinates, so precision does not
+// depend on where the scene sits or on its units); each element's form
+// factor is summed in double and handed out as float (7 digits are more
+// than the hemicube's own accuracy of about 1/R²).
+#ifndef RADIOSITY_HEMICUBE_H
+#define RADIOSITY_HEMICUBE_H
+
+#include <cstdint>
+#include <vector>
+
+#include "mesh.h"
+
+struct FormFactor {
+  int32_t elem;
+  float f;
+};
+
+// Where a column's time goes; summed over columns by callers.
+struct ColumnStats {
+  double transform_s = 0;  // face culling, vertex transform and outcodes
+  double raster_s = 0;     // clear, clip, project, scan-convert
+  double readback_s = 0;   // item buffer -> form factors
+  long elements = 0;       // leaf elements on front-facing faces
+  long covered = 0;        // elements with F > 0
+  long pixels = 0;         // hemicube pixels (3 R²)
+};
+
+class Hemicube {
+ public:
+  // R: pixels across the top face; even, 8..kMaxResolution.
+  explicit Hemicube(int resolution);
+  int resolution() const { return res_; }
+
+  // Form factors F(shooter -> e) > 0 for leaf elements e, in increasing e.
+  // The hemicube is turned by `angle` radians about the patch normal.
+  void Column(const Mesh& mesh, int shooter, double angle,
+              std::vector<FormFactor>* out, ColumnStats* stats = nullptr);
+
+  static constexpr int kMaxResolution = 4096;
+
+ private:
+  struct Edge;
+  void Scan(int face, const float (*pt)[2], int n, float za, float zb, float zc,
+            int32_t id);
+
+  int res_;
+  std::vector<float> dff_;    // 3 R² delta form factors: top, then 4 sides
+  std::vector<float> depth_;  // 1/distance, larger is nearer; 0 = empty
+  std::vector<int32_t> item_; // element id or -1
+  std::vector<float> local_;  // 3 floats per vertex, in the shooter frame
+  std::vector<uint32_t> code_;// outcodes per vertex, 5 bits per face
+  std::vector<double> acc_;   // per element
+  std::vector<int> front_, leaves_;  // scratch, kept to avoid reallocation
+};
+
+#endif

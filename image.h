@@ -1,0 +1,49 @@
+// Pictures and geometry exports of a solved mesh.
+#ifndef RADIOSITY_IMAGE_H
+#define RADIOSITY_IMAGE_H
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "scene.h"
+
+// What to draw: polygons (triangles, or convex planar quads) with a linear
+// radiosity (RGB) at every vertex, interpolated across (Gouraud).
+struct ShadedMesh {
+  std::vector<glm::dvec3> positions;
+  std::vector<glm::vec3> colors;          // linear radiosity, >= 0
+  std::vector<std::array<int, 4>> polys;  // vertex ids, CCW; [3] < 0: triangle
+};
+
+struct Image {
+  int width = 0, height = 0;
+  std::vector<glm::vec3> pixels;  // linear radiosity, row 0 at the top
+};
+
+// A camera that frames the box [lo, hi], looking at it from the front
+// (+z side), slightly above.
+Camera FrameBox(const glm::dvec3& lo, const glm::dvec3& hi);
+
+// Z-buffered perspective rendering. Back-facing polygons are culled (faces
+// are one-sided). Pixels that see nothing are black.
+void Render(const ShadedMesh& mesh, const Camera& cam, int width, int height,
+            Image* out);
+
+// Exposure from the scene: the scale that maps linear radiosity to display
+// values (see image.cpp for the rule).
+float AutoExposure(const ShadedMesh& mesh);
+
+// Writes an 8-bit sRGB picture, exposure applied and clamped.
+// FORMAT is "png" or "ppm". False with *err on an I/O error.
+bool WriteImage(const Image& img, float exposure, const std::string& path,
+                const std::string& format, std::string* err);
+
+// PLY (ascii) with per-vertex colours, exposure and sRGB applied, which
+// MeshLab and Blender open.
+bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
+              std::string* err);
+
+#endif

@@ -1,0 +1,105 @@
+// The master's side of progressive refinement radiosity: choosing
+// shooters, shooting with ambient overshooting, deciding when to stop.
+//
+// Numbers: radiosity, unshot radiosity, areas and the ambient sums are
+// double. Overshooting subtracts nearly equal quantities (unshot minus what
+// was shot in advance) and ρ → 1 scenes amplify any error by 1/(1−ρ), so
+// float's 7 digits would show in the answer; form factors arrive as float.
+#ifndef RADIOSITY_MASTER_H
+#define RADIOSITY_MASTER_H
+
+#include <csignal>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "hemicube.h"
+#include "mesh.h"
+
+class Solver {
+ public:
+  // overshoot: ambient overshooting (Feda & Purgathofer 1992).
+  Solver(const Mesh& mesh, bool overshoot);
+
+  // The patch with the largest power still to shoot (|unshot + overshoot
+  // estimate| × area, channels summed) among those not marked in `taken`
+  // (may be null), or -1 when there is nothing left to shoot.
+  int Select(const std::vector<char>* taken = nullptr) const;
+
+  // Shoots patch p along its column. The overshooting estimate is taken
+  // here, from the ambient term as it is now (paper §4.2), not when p was
+  // selected.
+  void Shoot(int p, const std::vector<FormFactor>& column);
+
+  // Σ|unshot|·area / Σ emitted·area, channels summed; 0 for a dark scene.
+  double UnshotFraction() const;
+  // Σ B·area over all elements / Σ emitted·area: grows without bound when
+  // a closed scene reflects everything.
+  double PowerRatio() const;
+  bool Dark() const { return emitted_ == 0; }
+  long shots() const { return shots_; }
+  int TimesShot(int p) const { return times_shot_[p]; }
+  const std::vector<glm::dvec3>& radiosity() const { return b_; }  // per element
+  const std::vector<glm::dvec3>& unshot() const { return unshot_; } // per patch
+  glm::dvec3 Ambient() const;  // the overshooting estimate before ρ
+
+ private:
+  glm::dvec3 ToShoot(int p) const;
+  void Resum();
+
+  const Mesh& mesh_;
+  bool overshoot_;
+  std::vector<glm::dvec3> b_;       // per element
+  std::vector<glm::dvec3> unshot_;  // per patch
+  std::vector<int> times_shot_;
+  glm::dvec3 unshot_sum_{0.0};      // Σ unshot·area, kept incrementally
+  glm::dvec3 reflect_{1.0};         // 1/(1−ρ̄): ambient interreflection factor
+  double total_area_ = 0, emitted_ = 0;
+  long shots_ = 0;
+};
+
+struct RunOptions {
+  bool overshoot = true;
+  int resolution = 256;     // hemicube pixels across
+  double epsilon = 1e-3;    // stop when UnshotFraction() < epsilon
+  long max_shots = 0;       // 0: no limit
+  double max_seconds = 0;   // 0: no limit
+  bool rotate = true;       // turn the hemicube per shot against aliasing
+  unsigned seed = 1;
+  long log_every = 0;       // shots between samples; 0: patches / 100
+  const volatile std::sig_atomic_t* stop = nullptr;  // set by SIGINT/SIGTERM
+};
+
+struct Sample {
+  double seconds;
+  long shots;
+  int wave;
+  long elements;
+  double unshot;
+};
+
+enum class RunStatus { kConverged, kLimit, kStopped, kNotConverged };
+
+struct RunResult {
+  RunStatus status = RunStatus::kConverged;
+  std::string why;          // for kNotConverged and kLimit
+  long shots = 0;
+  double seconds = 0;
+  double unshot = 0;
+  ColumnStats columns;      // worker side: form factors
+  double select_s = 0;      // master side: choosing shooters
+  double shoot_s = 0;       // master side: shooting
+};
+
+// The hemicube angle for the k-th shot of patch p: a hash, so that any
+// process computing that column turns the hemicube alike.
+double ShotAngle(unsigned seed, int patch, int k);
+
+// Runs to a stop in this process. `sample` (may be empty) is called every
+// log_every shots and once at the end.
+RunResult RunSequential(const Mesh& mesh, const RunOptions& opts, Solver* solver,
+                        const std::function<void(const Sample&)>& sample);
+
+#endif

@@ -1,0 +1,309 @@
+#include "mesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <unordered_map>
+
+#include "check.h"
+
+glm::dvec3 NewellNormal(const std::vector<glm::dvec3>& poly) {
+  glm::dvec3 n(0.0);
+  for (size_t i = 0; i < poly.size(); ++i) {
+    const glm::dvec3& a = poly[i];
+    const glm::dvec3& b = poly[(i + 1) % poly.size()];
+    n.x += (a.y - b.y) * (a.z + b.z);
+    n.y += (a.z - b.z) * (a.x + b.x);
+    n.z += (a.x - b.x) * (a.y + b.y);
+  }
+  return n * 0.5;  // length = area
+}
+
+namespace {
+
+bool LexLess(const glm::dvec3& a, const glm::dvec3& b) {
+  if (a.x != b.x) return a.x < b.x;
+  if (a.y != b.y) return a.y < b.y;
+  return a.z < b.z;
+}
+
+// The point k/n of the way from p to q, computed from the lexicographically
+// smaller endpoint so that a face walking the edge the other way gets the
+// bit-identical point (no hemicube cracks between faces cut alike).
+glm::dvec3 EdgePoint(const glm::dvec3& p, const glm::dvec3& q, int k, int n) {
+  if (k == 0) return p;
+  if (k == n) return q;
+  if (LexLess(p, q)) return p + (q - p) * (double(k) / n);
+  return q + (p - q) * (double(n - k) / n);
+}
+
+// Vertex ids of one input face: points are welded by exact value so that
+// the pieces of a split polygon share their common edges.
+class FaceVerts {
+ public:
+  explicit FaceVerts(std::vector<glm::dvec3>* verts) : verts_(verts) {}
+  int Id(const glm::dvec3& p) {
+    Key k;
+    std::memcpy(k.bits, &p, sizeof k.bits);
+    auto it = ids_.find(k);
+    if (it != ids_.end()) return it->second;
+    int id = int(verts_->size());
+    verts_->push_back(p);
+    ids_.emplace(k, id);
+    return id;
+  }
+
+ private:
+  struct Key {
+    uint64_t bits[3];
+    bool operator==(const Key& o) const { return std::memcmp(bits, o.bits, sizeof bits) == 0; }
+  };
+  struct Hash {
+    size_t operator()(const Key& k) const {
+      return k.bits[0] * 0x9E3779B97F4A7C15ull ^ k.bits[1] * 0xC2B2AE3D27D4EB4Full ^ k.bits[2];
+    }
+  };
+  std::vector<glm::dvec3>* verts_;
+  std::unordered_map<Key, int, Hash> ids_;
+};
+
+double PolyArea(const Mesh& m, const Element& e) {
+  std::vector<glm::dvec3> p;
+  for (int k = 0; k < (e.IsTriangle() ? 3 : 4); ++k) p.push_back(m.verts[e.v[k]]);
+  return glm::length(NewellNormal(p));
+}
+
+bool Convex(const std::vector<glm::dvec3>& q, const glm::dvec3& n) {
+  for (size_t i = 0; i < q.size(); ++i) {
+    const glm::dvec3& a = q[i];
+    const glm::dvec3& b = q[(i + 1) % q.size()];
+    const glm::dvec3& c = q[(i + 2) % q.size()];
+    if (glm::dot(glm::cross(b - a, c - b), n) <= 0) return false;
+  }
+  return true;
+}
+
+// Ear clipping in the face's plane; polygons are simple (not
+// self-intersecting) by the scene contract.
+std::vector<std::array<int, 3>> Triangulate(const std::vector<glm::dvec3>& poly,
+                                            const glm::dvec3& n) {
+  std::vector<std::array<int, 3>> tris;
+  std::vector<int> idx(poly.size());
+  for (size_t i = 0; i < idx.size(); ++i) idx[i] = int(i);
+  auto cross_n = [&](int a, int b, int c) {
+    return glm::dot(glm::cross(poly[b] - poly[a], poly[c] - poly[b]), n);
+  };
+  auto inside = [&](int p, int a, int b, int c) {
+    return cross_n(a, b, p) >= 0 && cross_n(b, c, p) >= 0 && cross_n(c, a, p) >= 0;
+  };
+  size_t guard = 0;
+  while (idx.size() > 3 && guard++ < 4 * poly.size() * poly.size()) {
+    bool cut = false;
+    for (size_t i = 0; i < idx.size() && !cut; ++i) {
+      int a = idx[(i + idx.size() - 1) % idx.size()], b = idx[i], c = idx[(i + 1) % idx.size()];
+      if (cross_n(a, b, c) <= 0) continue;  // reflex or collinear
+      bool ear = true;
+      for (int p : idx)
+        if (p != a && p != b && p != c && inside(p, a, b, c)) { ear = false; break; }
+      if (!ear) continue;
+      tris.push_back({a, b, c});
+      idx.erase(idx.begin() + i);
+      cut = true;
+    }
+    if (!cut) break;
+  }
+  if (idx.size() == 3 && cross_n(idx[0], idx[1], idx[2]) > 0)
+    tris.push_back({idx[0], idx[1], idx[2]});
+  return tris;
+}
+
+struct Builder {
+  Mesh* m;
+  int face;
+  int epp;  // elements per patch edge
+  FaceVerts* fv;
+  std::unordered_map<long long, int> patch_of;  // coarse cell -> patch id
+
+  int PatchFor(long long key) {
+    auto it = patch_of.find(key);
+    if (it != patch_of.end()) return it->second;
+    int id = int(m->patches.size());
+    m->patches.emplace_back();
+    m->patches.back().face = face;
+    m->faces[face].patches.push_back(id);
+    patch_of.emplace(key, id);
+    return id;
+  }
+
+  void AddElement(const std::array<int, 4>& v, long long patch_key) {
+    Element e;
+    e.v = v;
+    e.area = PolyArea(*m, e);
+    if (!(e.area > 0)) return;  // a sliver of rounding; it receives nothing
+    int patch = PatchFor(patch_key);
+    e.patch = patch;
+    m->patches[patch].elements.push_back(int(m->elems.size()));
+    m->elems.push_back(e);
+  }
+
+  // Quad a,b,c,d (convex, planar) cut into nu x nv patches of epp x epp
+  // elements by bilinear interpolation; cells stay planar and convex.
+  void Quad(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
+            const glm::dvec3& d, int nu, int nv, long long piece) {
+    int NU = nu * epp, NV = nv * epp;
+    std::vector<int> id((NU + 1) * (NV + 1));
+    for (int j = 0; j <= NV; ++j)
+      for (int i = 0; i <= NU; ++i) {
+        glm::dvec3 p;
+        if (j == 0) p = EdgePoint(a, b, i, NU);
+        else if (j == NV) p = EdgePoint(d, c, i, NU);
+        else if (i == 0) p = EdgePoint(a, d, j, NV);
+        else if (i == NU) p = EdgePoint(b, c, j, NV);
+        else {
+          double s = double(i) / NU, t = double(j) / NV;
+          p = (1 - s) * (1 - t) * a + s * (1 - t) * b + s * t * c + (1 - s) * t * d;
+        }
+        id[j * (NU + 1) + i] = fv->Id(p);
+      }
+    for (int j = 0; j < NV; ++j)
+      for (int i = 0; i < NU; ++i) {
+        long long key = (piece << 40) | (long long)(j / epp) << 20 | (i / epp);
+        AddElement({id[j * (NU + 1) + i], id[j * (NU + 1) + i + 1],
+                    id[(j + 1) * (NU + 1) + i + 1], id[(j + 1) * (NU + 1) + i]},
+                   key);
+      }
+  }
+
+  // Triangle a,b,c cut into n*n patches (the usual 4-way grid), each of
+  // epp*epp elements.
+  void Tri(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, int n,
+           long long piece) {
+    int N = n * epp;
+    auto at = [&](int i, int j) -> int {  // point a + (b-a) i/N + (c-a) j/N
+      glm::dvec3 p;
+      if (j == 0) p = EdgePoint(a, b, i, N);
+      else if (i == 0) p = EdgePoint(a, c, j, N);
+      else if (i + j == N) p = EdgePoint(b, c, j, N);
+      else p = a + (b - a) * (double(i) / N) + (c - a) * (double(j) / N);
+      return fv->Id(p);
+    };
+    std::vector<int> id((N + 1) * (N + 1), -1);
+    for (int j = 0; j <= N; ++j)
+      for (int i = 0; i + j <= N; ++i) id[j * (N + 1) + i] = at(i, j);
+    auto V = [&](int i, int j) { return id[j * (N + 1) + i]; };
+    for (int j = 0; j < N; ++j)
+      for (int i = 0; i + j < N; ++i) {
+        int I = i / epp, J = j / epp, s = i % epp + j % epp;
+        long long up = (piece << 40) | (long long)J << 20 | I << 1;
+        AddElement({V(i, j), V(i + 1, j), V(i, j + 1), -1}, s < epp ? up : up | 1);
+        if (i + j + 1 < N)
+          AddElement({V(i + 1, j), V(i + 1, j + 1), V(i, j + 1), -1},
+                     s < epp - 1 ? up : up | 1);
+      }
+  }
+};
+
+int Cuts(double length, double size) {
+  return std::max(1, int(std::ceil(length / size - 1e-9)));
+}
+
+}  // namespace
+
+bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
+               std::string* err) {
+  *mesh = Mesh();
+  mesh->scene_diagonal = glm::length(scene.hi - scene.lo);
+  mesh->patch_size = opts.patch_size > 0 ? opts.patch_size : mesh->scene_diagonal / 16;
+  if (!(mesh->patch_size > 0) || opts.elements_per_patch < 1) {
+    *err = "the scene has no extent to mesh";
+    return false;
+  }
+  const double ps = mesh->patch_size;
+  const int epp = opts.elements_per_patch;
+
+  // Count first so an absurd patch size is refused before allocating.
+  double estimate = 0;
+  for (const Face& f : scene.faces) {
+    double ext = 0;
+    for (const auto& p : f.verts) ext = std::max(ext, glm::length(p - f.verts[0]));
+    double n = std::ceil(ext / ps) * epp;
+    estimate += n * n * (f.verts.size() > 4 ? double(f.verts.size() - 2) : 1.0);
+  }
+  if (estimate > kMaxElements) {
+    *err = "patch size " + std::to_string(ps) + " would make about " +
+           std::to_string((long long)estimate) + " elements (limit " +
+           std::to_string(kMaxElements) + ")";
+    return false;
+  }
+
+  for (size_t fi = 0; fi < scene.faces.size(); ++fi) {
+    const Face& f = scene.faces[fi];
+    const Material& mat = scene.materials[f.material];
+    MeshFace mf;
+    mf.scene_face = int(fi);
+    mf.normal = f.normal;
+    mf.rho = mat.kd;
+    mf.emission = mat.ke;
+    mf.area = f.area;
+    mf.offset = glm::dot(f.normal, f.verts[0]);
+    int face = int(mesh->faces.size());
+    mesh->faces.push_back(mf);
+
+    mesh->faces[face].vbegin = int(mesh->verts.size());
+    FaceVerts fv(&mesh->verts);
+    Builder b{mesh, face, epp, &fv, {}};
+    const auto& v = f.verts;
+    if (v.size() == 3) {
+      double e = std::max({glm::length(v[1] - v[0]), glm::length(v[2] - v[1]),
+                           glm::length(v[0] - v[2])});
+      b.Tri(v[0], v[1], v[2], Cuts(e, ps), 0);
+    } else if (v.size() == 4 && Convex(v, f.normal)) {
+      int nu = Cuts(std::max(glm::length(v[1] - v[0]), glm::length(v[2] - v[3])), ps);
+      int nv = Cuts(std::max(glm::length(v[3] - v[0]), glm::length(v[2] - v[1])), ps);
+      b.Quad(v[0], v[1], v[2], v[3], nu, nv, 0);
+    } else {
+      // One cut count for all pieces keeps their shared edges conforming.
+      auto tris = Triangulate(v, f.normal);
+      int n = 1;
+      for (const auto& t : tris)
+        for (int k = 0; k < 3; ++k)
+          n = std::max(n, Cuts(glm::length(v[t[(k + 1) % 3]] - v[t[k]]), ps));
+      for (size_t t = 0; t < tris.size(); ++t)
+        b.Tri(v[tris[t][0]], v[tris[t][1]], v[tris[t][2]], n, (long long)t);
+    }
+    mesh->faces[face].vend = int(mesh->verts.size());
+  }
+
+  for (Patch& p : mesh->patches) {
+    glm::dvec3 c(0.0);
+    for (int e : p.elements) {
+      p.area += mesh->elems[e].area;
+      c += mesh->elems[e].area * mesh->Centroid(e);
+    }
+    CHECK(p.area > 0);
+    p.center = c / p.area;
+  }
+  return true;
+}
+
+void Mesh::Leaves(int patch, std::vector<int>* out) const {
+  out->clear();
+  std::vector<int> stack(patches[patch].elements.rbegin(), patches[patch].elements.rend());
+  while (!stack.empty()) {
+    int e = stack.back();
+    stack.pop_back();
+    if (elems[e].IsLeaf()) {
+      out->push_back(e);
+    } else {
+      for (int k = kChildren - 1; k >= 0; --k) stack.push_back(elems[e].first_child + k);
+    }
+  }
+}
+
+glm::dvec3 Mesh::Centroid(int elem) const {
+  const Element& e = elems[elem];
+  int n = e.IsTriangle() ? 3 : 4;
+  glm::dvec3 c(0.0);
+  for (int k = 0; k < n; ++k) c += verts[e.v[k]];
+  return c / double(n);
+}

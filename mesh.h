@@ -1,0 +1,89 @@
+// The patch -> element hierarchy built from the scene's faces.
+//
+// Each input face is cut into patches (the shooters) of at most
+// MeshOptions::patch_size across, and each patch into elements (the
+// receivers). Elements are convex planar triangles or quads; vertices are
+// shared inside one input face (for Gouraud shading and gap-free hemicube
+// rasterisation) but never across faces, so that shading does not bleed
+// round corners. Grid points on a face's edge are computed from the edge's
+// endpoints in a canonical order, so two faces cut the same way along a
+// common edge produce bit-identical points and the hemicube sees no cracks.
+//
+// The hierarchy is plain data (ids into flat arrays) so that run-time
+// subdivision can append children and ship the same edits to workers.
+#ifndef RADIOSITY_MESH_H
+#define RADIOSITY_MESH_H
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "scene.h"
+
+// A divided element has kChildren consecutive children (2 x 2).
+constexpr int kChildren = 4;
+
+struct Element {
+  std::array<int, 4> v{{-1, -1, -1, -1}};  // vertex ids, CCW; v[3] < 0: triangle
+  int patch = -1;                          // owning patch
+  int parent = -1;                         // -1: made by BuildMesh
+  int first_child = -1;                    // -1: a leaf (a receiver)
+  int level = 0;
+  double area = 0.0;
+  bool IsTriangle() const { return v[3] < 0; }
+  bool IsLeaf() const { return first_child < 0; }
+};
+
+struct Patch {
+  int face = -1;                 // index into Mesh::faces
+  std::vector<int> elements;     // its top-level elements
+  double area = 0.0;
+  glm::dvec3 center{0.0};        // area centroid: where the hemicube sits
+};
+
+struct MeshFace {
+  int scene_face = -1;           // index into Scene::faces
+  glm::dvec3 normal{0.0};
+  glm::dvec3 rho{0.0};           // Kd
+  glm::dvec3 emission{0.0};      // Ke
+  double area = 0.0;
+  double offset = 0.0;           // plane: dot(normal, x) == offset
+  int vbegin = 0, vend = 0;      // its vertices: Mesh::verts[vbegin, vend)
+  std::vector<int> patches;
+};
+
+struct MeshOptions {
+  // Largest patch edge; 0 picks the default rule: the scene's bounding-box
+  // diagonal / 16 (see man page, MESH).
+  double patch_size = 0.0;
+  // Elements per patch edge (a patch becomes n x n elements).
+  int elements_per_patch = 2;
+};
+
+struct Mesh {
+  std::vector<glm::dvec3> verts;
+  std::vector<Element> elems;
+  std::vector<Patch> patches;
+  std::vector<MeshFace> faces;
+  double patch_size = 0.0;     // as used
+  double scene_diagonal = 0.0; // bounding-box diagonal, the scene's scale
+
+  // Leaf elements of a patch, in a stable order.
+  void Leaves(int patch, std::vector<int>* out) const;
+  const MeshFace& FaceOf(int elem) const { return faces[patches[elems[elem].patch].face]; }
+  glm::dvec3 Centroid(int elem) const;
+};
+
+// Builds the mesh. Fails (false, *err) only when limits are exceeded, e.g.
+// the element count a patch size implies is larger than kMaxElements.
+bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
+               std::string* err);
+
+// Area of the polygon, and its Newell normal (not normalised).
+glm::dvec3 NewellNormal(const std::vector<glm::dvec3>& poly);
+
+constexpr int kMaxElements = 20'000'000;
+
+#endif

@@ -1,0 +1,265 @@
+// radiosity: main, options and usage. Everything else lives in the modules
+// (scene, mesh, hemicube, master, results, image); see README.md.
+#include <getopt.h>
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <unistd.h>
+
+#include "image.h"
+#include "master.h"
+#include "mesh.h"
+#include "results.h"
+#include "scene.h"
+
+#ifndef RADIOSITY_VERSION
+#define RADIOSITY_VERSION "0.1"
+#endif
+
+namespace {
+
+// Exit status, mirrored in man/radiosity.1 (EXIT STATUS).
+enum ExitStatus {
+  kExitOk = 0,       // done, or stopped on request
+  kExitFailure = 1,  // run-time failure: did not converge, I/O error
+  kExitUsage = 2,    // bad usage or bad input
+};
+
+const char kUsage[] =
+    "usage: radiosity [options] SCENE.obj\n"
+    "  -o, --out DIR          where results go (default: out)\n"
+    "  -r, --resolution R     hemicube pixels across the top face (default 256)\n"
+    "  -e, --epsilon E        stop when unshot energy < E x emitted (default 1e-3)\n"
+    "  -s, --shots N          stop after N shots\n"
+    "  -t, --time SEC         stop after SEC seconds\n"
+    "      --no-overshoot     plain progressive refinement\n"
+    "      --reference CSV    log RMS error against a converged result.csv\n"
+    "      --patch-size L     largest patch edge (default: scene diagonal / 16)\n"
+    "      --elements N       elements per patch edge (default 2)\n"
+    "      --no-rotate        keep the hemicube aligned (default: turned per shot)\n"
+    "      --seed N           seed of the hemicube turns (default 1)\n"
+    "      --log-every N      shots between log.csv rows (default: patches / 100)\n"
+    "      --camera \"ex ey ez tx ty tz fov\"\n"
+    "      --size WxH         picture size (default 512x512)\n"
+    "      --format png|ppm   picture format (default png)\n"
+    "  -q, --quiet            no messages but errors and warnings\n"
+    "  -v, --verbose          a line per progress sample\n"
+    "      --version          print the version\n"
+    "  -h, --help             this help\n";
+
+volatile std::sig_atomic_t g_stop = 0;
+
+void OnSignal(int sig) {
+  if (g_stop) {  // a second signal: leave at once
+    std::signal(sig, SIG_DFL);
+    std::raise(sig);
+  }
+  g_stop = 1;
+}
+
+[[noreturn]] void Die(int status, const std::string& msg) {
+  std::fprintf(stderr, "radiosity: %s\n", msg.c_str());
+  std::exit(status);
+}
+
+[[noreturn]] void BadOption(const char* opt, const char* arg, const char* what) {
+  Die(kExitUsage, std::string(opt) + " '" + arg + "': " + what +
+                      " (try 'radiosity --help')");
+}
+
+double Number(const char* opt, const char* arg, double lo, double hi) {
+  char* end = nullptr;
+  errno = 0;
+  double v = std::strtod(arg, &end);
+  if (end == arg || *end || errno || !std::isfinite(v)) BadOption(opt, arg, "not a number");
+  if (v < lo || v > hi) {
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "must be from %g to %g", lo, hi);
+    BadOption(opt, arg, buf);
+  }
+  return v;
+}
+
+long Integer(const char* opt, const char* arg, long lo, long hi) {
+  char* end = nullptr;
+  errno = 0;
+  long v = std::strtol(arg, &end, 10);
+  if (end == arg || *end || errno) BadOption(opt, arg, "not an integer");
+  if (v < lo || v > hi) {
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "must be from %ld to %ld", lo, hi);
+    BadOption(opt, arg, buf);
+  }
+  return v;
+}
+
+bool MakeDirs(const std::string& path, std::string* err) {
+  for (size_t i = 1; i <= path.size(); ++i) {
+    if (i < path.size() && path[i] != '/') continue;
+    std::string part = path.substr(0, i);
+    if (mkdir(part.c_str(), 0777) != 0 && errno != EEXIST) {
+      *err = part + ": " + std::strerror(errno);
+      return false;
+    }
+  }
+  struct stat st;
+  if (stat(path.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    *err = path + ": not a directory";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  enum {
+    kNoOvershoot = 256, kReference, kPatchSize, kElements, kNoRotate, kSeed,
+    kLogEvery, kCamera, kSize, kFormat, kVersion,
+  };
+  static const option kLong[] = {
+      {"out", required_argument, nullptr, 'o'},
+      {"resolution", required_argument, nullptr, 'r'},
+      {"epsilon", required_argument, nullptr, 'e'},
+      {"shots", required_argument, nullptr, 's'},
+      {"time", required_argument, nullptr, 't'},
+      {"no-overshoot", no_argument, nullptr, kNoOvershoot},
+      {"reference", required_argument, nullptr, kReference},
+      {"patch-size", required_argument, nullptr, kPatchSize},
+      {"elements", required_argument, nullptr, kElements},
+      {"no-rotate", no_argument, nullptr, kNoRotate},
+      {"seed", required_argument, nullptr, kSeed},
+      {"log-every", required_argument, nullptr, kLogEvery},
+      {"camera", required_argument, nullptr, kCamera},
+      {"size", required_argument, nullptr, kSize},
+      {"format", required_argument, nullptr, kFormat},
+      {"quiet", no_argument, nullptr, 'q'},
+      {"verbose", no_argument, nullptr, 'v'},
+      {"version", no_argument, nullptr, kVersion},
+      {"help", no_argument, nullptr, 'h'},
+      {nullptr, 0, nullptr, 0},
+  };
+  std::string out_dir = "out", reference, camera_text, format = "png";
+  RunOptions run;
+  MeshOptions mesh_opts;
+  int width = 512, height = 512, verbosity = 1;
+  opterr = 0;
+  int c;
+  while ((c = getopt_long(argc, argv, ":o:r:e:s:t:qvh", kLong, nullptr)) != -1) {
+    switch (c) {
+      case 'o': out_dir = optarg; break;
+      case 'r': {
+        run.resolution = int(Integer("--resolution", optarg, 8, Hemicube::kMaxResolution));
+        if (run.resolution % 2) BadOption("--resolution", optarg, "must be even");
+        break;
+      }
+      case 'e': run.epsilon = Number("--epsilon", optarg, 1e-15, 1); break;
+      case 's': run.max_shots = Integer("--shots", optarg, 1, 1L << 50); break;
+      case 't': run.max_seconds = Number("--time", optarg, 1e-3, 1e9); break;
+      case kNoOvershoot: run.overshoot = false; break;
+      case kReference: reference = optarg; break;
+      case kPatchSize: mesh_opts.patch_size = Number("--patch-size", optarg, 1e-300, 1e300); break;
+      case kElements: mesh_opts.elements_per_patch = int(Integer("--elements", optarg, 1, 64)); break;
+      case kNoRotate: run.rotate = false; break;
+      case kSeed: run.seed = unsigned(Integer("--seed", optarg, 0, 0xFFFFFFFFL)); break;
+      case kLogEvery: run.log_every = Integer("--log-every", optarg, 1, 1L << 50); break;
+      case kCamera: camera_text = optarg; break;
+      case kSize: {
+        int n = 0;
+        if (std::sscanf(optarg, "%dx%d%n", &width, &height, &n) != 2 || optarg[n])
+          BadOption("--size", optarg, "expected WIDTHxHEIGHT");
+        if (width < 1 || height < 1 || width > 16384 || height > 16384)
+          BadOption("--size", optarg, "width and height must be from 1 to 16384");
+        break;
+      }
+      case kFormat:
+        format = optarg;
+        if (format != "png" && format != "ppm") BadOption("--format", optarg, "must be png or ppm");
+        break;
+      case 'q': verbosity = 0; break;
+      case 'v': verbosity = 2; break;
+      case kVersion: std::printf("radiosity %s\n", RADIOSITY_VERSION); return kExitOk;
+      case 'h': std::fputs(kUsage, stdout); return kExitOk;
+      case ':': Die(kExitUsage, std::string("option ") + argv[optind - 1] + " needs a value (try 'radiosity --help')");
+      default: Die(kExitUsage, std::string("unknown option ") + argv[optind - 1] + " (try 'radiosity --help')");
+    }
+  }
+  if (optind != argc - 1) {
+    std::fputs(kUsage, stderr);
+    return kExitUsage;
+  }
+  const std::string scene_path = argv[optind];
+
+  std::string err;
+  std::vector<std::string> warnings;
+  Scene scene;
+  bool loaded = LoadScene(scene_path, &scene, &err, &warnings);
+  for (const std::string& w : warnings) std::fprintf(stderr, "radiosity: warning: %s\n", w.c_str());
+  if (!loaded) Die(kExitUsage, err);
+
+  Camera camera = scene.has_camera ? scene.camera : FrameBox(scene.lo, scene.hi);
+  if (!camera_text.empty() && !ParseCamera(camera_text, &camera, &err))
+    Die(kExitUsage, "--camera '" + camera_text + "': " + err);
+
+  std::vector<glm::dvec3> ref;
+  if (!reference.empty() && !ReadReference(reference, scene, &ref, &err)) Die(kExitUsage, err);
+
+  Mesh mesh;
+  if (!BuildMesh(scene, mesh_opts, &mesh, &err)) Die(kExitUsage, scene_path + ": " + err);
+  if (verbosity >= 2)
+    std::fprintf(stderr, "radiosity: %zu faces, %zu patches, %zu elements (patch size %g)\n",
+                 scene.faces.size(), mesh.patches.size(), mesh.elems.size(), mesh.patch_size);
+
+  if (!MakeDirs(out_dir, &err)) Die(kExitFailure, err);
+  LogCsv log;
+  if (!log.Open(out_dir + "/log.csv", &err)) Die(kExitFailure, err);
+
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  run.stop = &g_stop;
+  Solver solver(mesh, run.overshoot);
+  auto sample = [&](const Sample& s) {
+    double rms = 0, rel = 0;
+    if (!ref.empty()) RmsError(scene, FaceRadiosity(mesh, solver.radiosity()), ref, &rms, &rel);
+    log.Row(s, ref.empty() ? nullptr : &rms, ref.empty() ? nullptr : &rel);
+    if (verbosity >= 2) {
+      std::fprintf(stderr, "radiosity: %8.2f s %7ld shots  unshot %.3e", s.seconds, s.shots, s.unshot);
+      if (!ref.empty()) std::fprintf(stderr, "  rms %.3e (%.3f%%)", rms, 100 * rel);
+      std::fputc('\n', stderr);
+    }
+  };
+  RunResult result = RunSequential(mesh, run, &solver, sample);
+  if (!log.Close(&err)) Die(kExitFailure, err);
+  if (result.status == RunStatus::kNotConverged)
+    Die(kExitFailure, "did not converge after " + std::to_string(result.shots) + " shots: " +
+                          result.why + "; no results written");
+
+  std::vector<glm::dvec3> face_b = FaceRadiosity(mesh, solver.radiosity());
+  ShadedMesh shaded = Shade(mesh, solver.radiosity());
+  const float exposure = AutoExposure(shaded);
+  Image img;
+  Render(shaded, camera, width, height, &img);
+  const std::string picture = out_dir + "/final." + format;
+  if (!WriteResultCsv(out_dir + "/result.csv", scene, face_b, &err) ||
+      !WriteImage(img, exposure, picture, format, &err) ||
+      !WritePly(shaded, exposure, out_dir + "/result.ply", &err))
+    Die(kExitFailure, err);
+
+  if (verbosity >= 1) {
+    const char* how = result.status == RunStatus::kConverged ? "converged"
+                      : result.status == RunStatus::kStopped ? "stopped on request"
+                                                             : result.why.c_str();
+    std::fprintf(stderr,
+                 "radiosity: %s: %ld shots in %.2f s, unshot %.2e of emitted; "
+                 "%zu patches, %zu elements; results in %s/\n",
+                 how, result.shots, result.seconds, result.unshot, mesh.patches.size(),
+                 mesh.elems.size(), out_dir.c_str());
+  }
+  return kExitOk;
+}

@@ -1,0 +1,164 @@
+#include "results.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
+  std::vector<glm::dvec3> sum(mesh.faces.size(), glm::dvec3(0.0));
+  std::vector<double> area(mesh.faces.size(), 0.0);
+  std::vector<int> leaves;
+  for (size_t f = 0; f < mesh.faces.size(); ++f)
+    for (int p : mesh.faces[f].patches) {
+      mesh.Leaves(p, &leaves);
+      for (int e : leaves) {
+        sum[f] += elem_b[e] * mesh.elems[e].area;
+        area[f] += mesh.elems[e].area;
+      }
+    }
+  std::vector<glm::dvec3> out(mesh.faces.size(), glm::dvec3(0.0));
+  for (size_t f = 0; f < out.size(); ++f)
+    if (area[f] > 0) out[f] = glm::max(sum[f] / area[f], glm::dvec3(0.0));
+  return out;
+}
+
+bool WriteResultCsv(const std::string& path, const Scene& scene,
+                    const std::vector<glm::dvec3>& face_b, std::string* err) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) {
+    *err = path + ": " + std::strerror(errno);
+    return false;
+  }
+  std::fprintf(f, "face,object,area,B_r,B_g,B_b\n");
+  for (size_t i = 0; i < scene.faces.size(); ++i) {
+    const Face& fc = scene.faces[i];
+    std::fprintf(f, "%d,%s,%.9g,%.9g,%.9g,%.9g\n", fc.index, scene.objects[fc.object].c_str(),
+                 fc.area, face_b[i].r, face_b[i].g, face_b[i].b);
+  }
+  if (std::fclose(f) != 0) {
+    *err = path + ": " + std::strerror(errno);
+    return false;
+  }
+  return true;
+}
+
+bool ReadReference(const std::string& path, const Scene& scene,
+                   std::vector<glm::dvec3>* ref, std::string* err) {
+  std::ifstream in(path);
+  if (!in) {
+    *err = path + ": cannot open: " + std::strerror(errno);
+    return false;
+  }
+  ref->assign(scene.faces.size(), glm::dvec3(0.0));
+  std::string line;
+  int lineno = 0;
+  size_t row = 0;
+  auto fail = [&](const std::string& what) {
+    *err = path + ":" + std::to_string(lineno) + ": " + what;
+    return false;
+  };
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (lineno == 1) {
+      if (line != "face,object,area,B_r,B_g,B_b") return fail("not a result.csv header");
+      continue;
+    }
+    if (line.empty()) continue;
+    std::vector<std::string> col;
+    std::stringstream ss(line);
+    std::string c;
+    while (std::getline(ss, c, ',')) col.push_back(c);
+    if (col.size() != 6) return fail("expected 6 columns");
+    if (row >= scene.faces.size()) return fail("more rows than the scene has faces");
+    double v[4];
+    for (int k = 0; k < 4; ++k) {
+      const std::string& s = col[2 + k];
+      char* end = nullptr;
+      errno = 0;
+      v[k] = std::strtod(s.c_str(), &end);
+      if (s.empty() || *end || errno || !std::isfinite(v[k]) || v[k] < 0)
+        return fail("bad number '" + s + "'");
+    }
+    if (col[0] != std::to_string(scene.faces[row].index))
+      return fail("face " + col[0] + " is not the scene's face " +
+                  std::to_string(scene.faces[row].index) + " (another scene?)");
+    if (std::abs(v[0] - scene.faces[row].area) > 1e-6 * (v[0] + scene.faces[row].area))
+      return fail("face area differs from the scene's (another scene?)");
+    (*ref)[row++] = glm::dvec3(v[1], v[2], v[3]);
+  }
+  if (row != scene.faces.size()) {
+    ++lineno;
+    return fail("has " + std::to_string(row) + " rows, the scene " +
+                std::to_string(scene.faces.size()) + " faces");
+  }
+  return true;
+}
+
+void RmsError(const Scene& scene, const std::vector<glm::dvec3>& face_b,
+              const std::vector<glm::dvec3>& ref, double* rms, double* rel_rms) {
+  double se = 0, area = 0, mean = 0;
+  for (size_t i = 0; i < scene.faces.size(); ++i) {
+    const double a = scene.faces[i].area;
+    const glm::dvec3 d = ref[i] - face_b[i];
+    se += a * glm::dot(d, d) / 3;
+    mean += a * (ref[i].r + ref[i].g + ref[i].b) / 3;
+    area += a;
+  }
+  *rms = area > 0 ? std::sqrt(se / area) : 0;
+  *rel_rms = mean > 0 ? *rms / (mean / area) : 0;
+}
+
+LogCsv::~LogCsv() {
+  if (f_) std::fclose(f_);
+}
+
+bool LogCsv::Open(const std::string& path, std::string* err) {
+  path_ = path;
+  f_ = std::fopen(path.c_str(), "w");
+  if (!f_) {
+    *err = path + ": " + std::strerror(errno);
+    return false;
+  }
+  std::fprintf(f_, "time_s,shots,wave,elements,unshot_fraction,rms,rel_rms\n");
+  return true;
+}
+
+void LogCsv::Row(const Sample& s, const double* rms, const double* rel_rms) {
+  std::fprintf(f_, "%.6f,%ld,%d,%ld,%.6g,", s.seconds, s.shots, s.wave, s.elements, s.unshot);
+  if (rms) std::fprintf(f_, "%.6g,%.6g\n", *rms, *rel_rms);
+  else std::fprintf(f_, ",\n");
+}
+
+bool LogCsv::Close(std::string* err) {
+  int rc = std::fclose(f_);
+  f_ = nullptr;
+  if (rc != 0) {
+    *err = path_ + ": " + std::strerror(errno);
+    return false;
+  }
+  return true;
+}
+
+ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
+  ShadedMesh s;
+  s.positions = mesh.verts;
+  std::vector<glm::dvec3> sum(mesh.verts.size(), glm::dvec3(0.0));
+  std::vector<double> w(mesh.verts.size(), 0.0);
+  for (size_t e = 0; e < mesh.elems.size(); ++e) {
+    const Element& el = mesh.elems[e];
+    if (!el.IsLeaf()) continue;
+    s.polys.push_back(el.v);
+    const glm::dvec3 b = glm::max(elem_b[e], glm::dvec3(0.0));
+    for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
+      sum[el.v[k]] += b * el.area;
+      w[el.v[k]] += el.area;
+    }
+  }
+  s.colors.resize(mesh.verts.size(), glm::vec3(0.0f));
+  for (size_t v = 0; v < sum.size(); ++v)
+    if (w[v] > 0) s.colors[v] = glm::vec3(sum[v] / w[v]);
+  return s;
+}

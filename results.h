@@ -1,0 +1,52 @@
+// What a run leaves behind: result.csv, log.csv, the reference it is
+// measured against (paper §5.2), and the shaded mesh pictures are made of.
+#ifndef RADIOSITY_RESULTS_H
+#define RADIOSITY_RESULTS_H
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "image.h"
+#include "master.h"
+#include "mesh.h"
+#include "scene.h"
+
+// Per scene face: the area-weighted mean radiosity of its leaf elements,
+// negative rounding residue clamped to 0.
+std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b);
+
+// result.csv: `face,object,area,B_r,B_g,B_b`, one row per accepted face.
+bool WriteResultCsv(const std::string& path, const Scene& scene,
+                    const std::vector<glm::dvec3>& face_b, std::string* err);
+
+// A converged result.csv of the same scene, indexed like Scene::faces.
+// Fails with "FILE:LINE: what" when it does not match the scene.
+bool ReadReference(const std::string& path, const Scene& scene,
+                   std::vector<glm::dvec3>* ref, std::string* err);
+
+// RMS error over faces (area-weighted, channels averaged) and the same
+// divided by the reference's area-weighted mean radiosity.
+void RmsError(const Scene& scene, const std::vector<glm::dvec3>& face_b,
+              const std::vector<glm::dvec3>& ref, double* rms, double* rel_rms);
+
+// log.csv, a row per progress sample.
+class LogCsv {
+ public:
+  ~LogCsv();
+  bool Open(const std::string& path, std::string* err);
+  void Row(const Sample& s, const double* rms, const double* rel_rms);
+  bool Close(std::string* err);
+
+ private:
+  std::FILE* f_ = nullptr;
+  std::string path_;
+};
+
+// Leaf elements with radiosity averaged to their vertices (inside one face;
+// faces do not share vertices), ready to draw or export.
+ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b);
+
+#endif
