@@ -7,18 +7,6 @@
 
 #include "check.h"
 
-glm::dvec3 NewellNormal(const std::vector<glm::dvec3>& poly) {
-  glm::dvec3 n(0.0);
-  for (size_t i = 0; i < poly.size(); ++i) {
-    const glm::dvec3& a = poly[i];
-    const glm::dvec3& b = poly[(i + 1) % poly.size()];
-    n.x += (a.y - b.y) * (a.z + b.z);
-    n.y += (a.z - b.z) * (a.x + b.x);
-    n.z += (a.x - b.x) * (a.y + b.y);
-  }
-  return n * 0.5;  // length = area
-}
-
 namespace {
 
 bool LexLess(const glm::dvec3& a, const glm::dvec3& b) {
@@ -70,7 +58,7 @@ class FaceVerts {
 double PolyArea(const Mesh& m, const Element& e) {
   std::vector<glm::dvec3> p;
   for (int k = 0; k < (e.IsTriangle() ? 3 : 4); ++k) p.push_back(m.verts[e.v[k]]);
-  return glm::length(NewellNormal(p));
+  return glm::length(AreaVector(p));
 }
 
 bool Convex(const std::vector<glm::dvec3>& q, const glm::dvec3& n) {

@@ -81,9 +81,6 @@ struct Mesh {
 bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
                std::string* err);
 
-// Area of the polygon, and its Newell normal (not normalised).
-glm::dvec3 NewellNormal(const std::vector<glm::dvec3>& poly);
-
 constexpr int kMaxElements = 20'000'000;
 
 #endif

@@ -49,6 +49,9 @@ struct Scene {
 bool LoadScene(const std::string& path, Scene* scene, std::string* err,
                std::vector<std::string>* warnings);
 
+// A polygon's normal scaled to its area (Newell's method).
+glm::dvec3 AreaVector(const std::vector<glm::dvec3>& poly);
+
 // Parses "ex ey ez tx ty tz fov" (the --camera option and the OBJ comment).
 bool ParseCamera(const std::string& text, Camera* cam, std::string* err);
 
