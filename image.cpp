@@ -1,0 +1,418 @@
+// Pictures of a solved mesh: a small software rasteriser (z-buffer,
+// frustum clipping, back-face culling, perspective-correct Gouraud), the
+// exposure rule, 8-bit sRGB encoding, and the PNG, PPM and PLY writers.
+#include "image.h"
+
+#include <stb_image_write.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <utility>
+
+#include "check.h"
+
+namespace {
+
+// Vertices snap to 1/256 pixel, so coverage is decided by exact integer
+// edge functions: shared edges are watertight, and a scene scaled by 1e±4
+// (camera too) covers the same pixels despite rounding in the projection.
+constexpr int64_t kSub = 256;
+
+// Triangles are clipped to the frustum widened by this factor in x and y
+// (a guard band): projected coordinates stay small enough for 64-bit edge
+// functions, and the edges that clipping adds lie off screen.
+constexpr double kGuard = 2.0;
+
+// The near plane, relative to the eye–target distance, so that the picture
+// does not depend on the scene's units.
+constexpr double kNearFraction = 1e-4;
+
+struct ClipVert {
+  glm::dvec3 p;  // camera space: x right, y up, z forward (depth)
+  glm::vec3 c;
+};
+
+struct ScreenVert {
+  int64_t x = 0, y = 0;  // pixel coordinates × kSub, y down
+  float w = 0;           // near / depth: linear in screen space
+  glm::vec3 c{0.0f};
+};
+
+struct Frustum {
+  double near, gx, gy;  // gx, gy: half-extents of the guard band at depth 1
+
+  // Signed distance to clip plane PLANE (near, left, right, bottom, top),
+  // >= 0 inside.
+  double Dist(int plane, const glm::dvec3& p) const {
+    switch (plane) {
+      case 0: return p.z - near;
+      case 1: return gx * p.z + p.x;
+      case 2: return gx * p.z - p.x;
+      case 3: return gy * p.z + p.y;
+      default: return gy * p.z - p.y;
+    }
+  }
+  static constexpr int kPlanes = 5;
+};
+
+// A triangle gains at most one vertex per plane.
+constexpr int kMaxClipVerts = 3 + Frustum::kPlanes;
+
+// Sutherland–Hodgman against one plane; returns the new vertex count.
+int ClipPlane(const Frustum& f, int plane, const ClipVert* in, int n,
+              ClipVert* out) {
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    const ClipVert& a = in[i];
+    const ClipVert& b = in[(i + 1) % n];
+    const double da = f.Dist(plane, a.p), db = f.Dist(plane, b.p);
+    if (da >= 0) out[m++] = a;
+    if ((da >= 0) != (db >= 0)) {
+      // Interpolate from the inside vertex: the neighbour sharing this edge
+      // walks it the other way and must get the bit-identical point.
+      const bool a_in = da >= 0;
+      const ClipVert& vi = a_in ? a : b;
+      const ClipVert& vo = a_in ? b : a;
+      const double di = a_in ? da : db, dout = a_in ? db : da;
+      const double t = di / (di - dout);
+      out[m++] = {vi.p + t * (vo.p - vi.p), vi.c + float(t) * (vo.c - vi.c)};
+    }
+  }
+  return m;
+}
+
+int64_t FloorDiv(int64_t a, int64_t b) {  // b > 0
+  return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+
+struct Target {
+  int width, height;
+  float* depth;  // near / depth of what is drawn; 0 = nothing
+  glm::vec3* color;
+};
+
+// Pixel-centre sampling with the top-left fill rule.
+void DrawTriangle(const ScreenVert& a, ScreenVert b, ScreenVert c,
+                  const Target& t) {
+  auto orient = [](const ScreenVert& p, const ScreenVert& q, int64_t x,
+                   int64_t y) {
+    return (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
+  };
+  int64_t area = orient(a, b, c.x, c.y);
+  // y runs down the screen, so a triangle counter-clockwise seen from the
+  // front has negative area; positive is a back face, zero a sliver.
+  if (area >= 0) return;
+  std::swap(b, c);
+  area = -area;
+
+  const int64_t half = kSub / 2;
+  const int64_t min_x = std::min({a.x, b.x, c.x}), max_x = std::max({a.x, b.x, c.x});
+  const int64_t min_y = std::min({a.y, b.y, c.y}), max_y = std::max({a.y, b.y, c.y});
+  const int x0 = int(std::max<int64_t>(0, -FloorDiv(half - min_x, kSub)));
+  const int y0 = int(std::max<int64_t>(0, -FloorDiv(half - min_y, kSub)));
+  const int x1 = int(std::min<int64_t>(t.width - 1, FloorDiv(max_x - half, kSub)));
+  const int y1 = int(std::min<int64_t>(t.height - 1, FloorDiv(max_y - half, kSub)));
+  if (x0 > x1 || y0 > y1) return;
+
+  // Edge k is opposite vertex k; its function is that vertex's barycentric
+  // weight × area. A pixel centre on an edge belongs to the triangle only if
+  // the edge is a top or left one (the neighbour walks it the other way),
+  // folded in as a bias of -1 so that "inside" is all three >= 0.
+  const ScreenVert* v[3] = {&a, &b, &c};
+  int64_t row[3], step_x[3], step_y[3];
+  const int64_t px = int64_t(x0) * kSub + half, py = int64_t(y0) * kSub + half;
+  for (int k = 0; k < 3; ++k) {
+    const ScreenVert& p = *v[(k + 1) % 3];
+    const ScreenVert& q = *v[(k + 2) % 3];
+    const int64_t dx = q.x - p.x, dy = q.y - p.y;
+    const bool top_left = dy < 0 || (dy == 0 && dx > 0);
+    row[k] = orient(p, q, px, py) - (top_left ? 0 : 1);
+    step_x[k] = -dy * kSub;
+    step_y[k] = dx * kSub;
+  }
+  // Perspective-correct: near/depth and colour·near/depth are linear in
+  // screen space; the pixel's colour is their ratio.
+  const float inv_area = 1.0f / float(area);
+  const float w[3] = {a.w * inv_area, b.w * inv_area, c.w * inv_area};
+  const glm::vec3 cw[3] = {a.c * w[0], b.c * w[1], c.c * w[2]};
+
+  for (int y = y0; y <= y1; ++y) {
+    int64_t e0 = row[0], e1 = row[1], e2 = row[2];
+    float* depth = t.depth + size_t(y) * t.width;
+    glm::vec3* color = t.color + size_t(y) * t.width;
+    for (int x = x0; x <= x1; ++x) {
+      if ((e0 | e1 | e2) >= 0) {
+        const float f0 = float(e0), f1 = float(e1), f2 = float(e2);
+        const float z = f0 * w[0] + f1 * w[1] + f2 * w[2];
+        if (z > depth[x]) {
+          depth[x] = z;
+          color[x] = (f0 * cw[0] + f1 * cw[1] + f2 * cw[2]) / z;
+        }
+      }
+      e0 += step_x[0];
+      e1 += step_x[1];
+      e2 += step_x[2];
+    }
+    row[0] += step_y[0];
+    row[1] += step_y[1];
+    row[2] += step_y[2];
+  }
+}
+
+double PolyArea(const ShadedMesh& mesh, const std::array<int, 4>& q) {
+  const glm::dvec3& p0 = mesh.positions[q[0]];
+  const glm::dvec3& p1 = mesh.positions[q[1]];
+  const glm::dvec3& p2 = mesh.positions[q[2]];
+  if (q[3] < 0) return 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+  // A planar quad's area is half the cross product of its diagonals.
+  return 0.5 * glm::length(glm::cross(p2 - p0, mesh.positions[q[3]] - p1));
+}
+
+int PolySize(const std::array<int, 4>& q) { return q[3] < 0 ? 3 : 4; }
+
+void CheckPolys(const ShadedMesh& mesh) {
+  CHECK(mesh.colors.size() == mesh.positions.size());
+  const int n = int(mesh.positions.size());
+  for (const auto& q : mesh.polys)
+    for (int k = 0; k < PolySize(q); ++k) CHECK(q[k] >= 0 && q[k] < n);
+}
+
+// Exposure, clamp, exact sRGB transfer curve, 8 bits with rounding.
+uint8_t Encode(float linear, float exposure) {
+  const double v = double(linear) * exposure;
+  if (!(v > 0)) return 0;  // also NaN
+  if (v >= 1) return 255;
+  const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+  return uint8_t(std::lround(s * 255));
+}
+
+// Writes the whole file or nothing is left behind: "PATH: strerror".
+bool WriteFile(const std::string& path, const void* data, size_t size,
+               std::string* err) {
+  FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) {
+    *err = path + ": " + std::strerror(errno);
+    return false;
+  }
+  bool ok = std::fwrite(data, 1, size, f) == size;
+  int e = errno;
+  if (std::fclose(f) != 0 && ok) {
+    ok = false;
+    e = errno;
+  }
+  if (!ok) {
+    *err = path + ": " + std::strerror(e);
+    std::remove(path.c_str());
+  }
+  return ok;
+}
+
+void AppendBytes(void* context, void* data, int size) {
+  static_cast<std::string*>(context)->append(static_cast<const char*>(data), size_t(size));
+}
+
+}  // namespace
+
+Camera FrameBox(const glm::dvec3& lo, const glm::dvec3& hi) {
+  constexpr double kFov = 45.0;
+  constexpr double kMargin = 1.1;  // the box fills at most 1/1.1 of the view
+  Camera cam;
+  cam.fov_deg = kFov;
+  cam.target = 0.5 * (lo + hi);
+  // From the front (+z), raised about 20 degrees.
+  const glm::dvec3 back = glm::normalize(glm::dvec3(0.0, 0.35, 1.0));
+  const glm::dvec3 right(1.0, 0.0, 0.0);
+  const glm::dvec3 up = glm::cross(back, right);
+  // The nearest distance at which every corner fits the (square) view:
+  // a corner at (x, y) off axis and z towards the eye is at depth d - z.
+  const double t = std::tan(glm::radians(kFov / 2)) / kMargin;
+  double d = 0;
+  for (int i = 0; i < 8; ++i) {
+    const glm::dvec3 corner(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z);
+    const glm::dvec3 r = corner - cam.target;
+    const double off = std::max(std::abs(glm::dot(r, right)), std::abs(glm::dot(r, up)));
+    d = std::max(d, glm::dot(r, back) + off / t);
+  }
+  if (!(d > 0) || !std::isfinite(d)) d = 1;  // a single point has no size
+  cam.eye = cam.target + d * back;
+  return cam;
+}
+
+void Render(const ShadedMesh& mesh, const Camera& cam, int width, int height,
+            Image* out) {
+  CHECK(width > 0 && height > 0);
+  CHECK(cam.fov_deg > 0 && cam.fov_deg < 180);
+  CheckPolys(mesh);
+  out->width = width;
+  out->height = height;
+  out->pixels.assign(size_t(width) * height, glm::vec3(0.0f));
+
+  glm::dvec3 fwd = cam.target - cam.eye;
+  const double dist = glm::length(fwd);
+  if (!(dist > 0) || !std::isfinite(dist)) return;  // no view direction
+  fwd /= dist;
+  glm::dvec3 right = glm::cross(fwd, glm::dvec3(0.0, 1.0, 0.0));
+  if (glm::length(right) < 1e-6) {
+    // Looking straight down (up): -z (+z) at the top of the picture, as for
+    // a camera tilted there from the front.
+    right = glm::cross(fwd, glm::dvec3(0.0, 0.0, fwd.y > 0 ? 1.0 : -1.0));
+  }
+  right = glm::normalize(right);
+  const glm::dvec3 up = glm::cross(right, fwd);
+
+  const double ty = std::tan(glm::radians(cam.fov_deg / 2));
+  const double tx = ty * width / height;
+  const Frustum frustum{kNearFraction * dist, kGuard * tx, kGuard * ty};
+
+  auto project = [&](const ClipVert& v) {
+    const double sx = v.p.x / (v.p.z * tx), sy = v.p.y / (v.p.z * ty);
+    ScreenVert s;
+    s.x = std::llround((sx + 1) * 0.5 * width * kSub);
+    s.y = std::llround((1 - sy) * 0.5 * height * kSub);
+    s.w = float(frustum.near / v.p.z);
+    s.c = v.c;
+    return s;
+  };
+
+  // Per vertex: camera-space position, whether it needs clipping, and (if
+  // not) its projection, shared by every polygon around it.
+  const size_t nv = mesh.positions.size();
+  std::vector<ClipVert> cv(nv);
+  std::vector<ScreenVert> sv(nv);
+  std::vector<uint8_t> state(nv);  // 0 invalid, 1 needs clipping, 2 inside
+  for (size_t i = 0; i < nv; ++i) {
+    const glm::dvec3 r = mesh.positions[i] - cam.eye;
+    cv[i] = {{glm::dot(r, right), glm::dot(r, up), glm::dot(r, fwd)}, mesh.colors[i]};
+    if (!std::isfinite(cv[i].p.x) || !std::isfinite(cv[i].p.y) || !std::isfinite(cv[i].p.z)) continue;
+    bool inside = true;
+    for (int k = 0; k < Frustum::kPlanes; ++k) inside = inside && frustum.Dist(k, cv[i].p) >= 0;
+    state[i] = inside ? 2 : 1;
+    if (inside) sv[i] = project(cv[i]);
+  }
+
+  std::vector<float> depth(size_t(width) * height, 0.0f);
+  const Target target{width, height, depth.data(), out->pixels.data()};
+  for (const auto& q : mesh.polys) {
+    for (int k = 1; k + 1 < PolySize(q); ++k) {
+      const int a = q[0], b = q[k], c = q[k + 1];
+      if (!state[a] || !state[b] || !state[c]) continue;
+      if (state[a] == 2 && state[b] == 2 && state[c] == 2) {
+        DrawTriangle(sv[a], sv[b], sv[c], target);
+        continue;
+      }
+      ClipVert buf[2][kMaxClipVerts] = {{cv[a], cv[b], cv[c]}, {}};
+      int n = 3, cur = 0;
+      for (int plane = 0; plane < Frustum::kPlanes && n >= 3; ++plane) {
+        n = ClipPlane(frustum, plane, buf[cur], n, buf[1 - cur]);
+        cur = 1 - cur;
+      }
+      if (n < 3) continue;
+      ScreenVert s[kMaxClipVerts];
+      for (int i = 0; i < n; ++i) s[i] = project(buf[cur][i]);
+      for (int i = 1; i + 1 < n; ++i) DrawTriangle(s[0], s[i], s[i + 1], target);
+    }
+  }
+}
+
+// Exposure rule: each vertex has a luminance (0.2126 R + 0.7152 G +
+// 0.0722 B) and an equal share of the area of every polygon around it. The
+// luminance below which 95% of the surface area lies is mapped to 0.8 of
+// display white (before the sRGB curve), so small bright lights do not
+// darken the picture and the units of Ke do not matter. If that is 0 (e.g.
+// only the lights are lit yet) the brightest vertex is used; a black scene
+// gets 1.
+float AutoExposure(const ShadedMesh& mesh) {
+  constexpr double kPercentile = 0.95;
+  constexpr double kWhite = 0.8;
+  CheckPolys(mesh);
+  std::vector<double> weight(mesh.positions.size(), 0.0);
+  for (const auto& q : mesh.polys) {
+    const double a = PolyArea(mesh, q);
+    if (!std::isfinite(a)) continue;
+    for (int k = 0; k < PolySize(q); ++k) weight[q[k]] += a / PolySize(q);
+  }
+  std::vector<std::pair<double, double>> lw;  // (luminance, weight)
+  double total = 0, brightest = 0;
+  for (size_t i = 0; i < weight.size(); ++i) {
+    if (!(weight[i] > 0)) continue;
+    const glm::dvec3 c(mesh.colors[i]);
+    double lum = 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
+    if (!std::isfinite(lum) || lum < 0) lum = 0;
+    lw.emplace_back(lum, weight[i]);
+    total += weight[i];
+    brightest = std::max(brightest, lum);
+  }
+  std::sort(lw.begin(), lw.end());
+  double level = 0, sum = 0;
+  for (const auto& [lum, w] : lw) {
+    sum += w;
+    level = lum;
+    if (sum >= kPercentile * total) break;
+  }
+  if (!(level > 0)) level = brightest;
+  if (!(level > 0)) return 1.0f;
+  return float(std::clamp(kWhite / level, double(std::numeric_limits<float>::min()),
+                          double(std::numeric_limits<float>::max())));
+}
+
+bool WriteImage(const Image& img, float exposure, const std::string& path,
+                const std::string& format, std::string* err) {
+  CHECK(img.width > 0 && img.height > 0 &&
+        img.pixels.size() == size_t(img.width) * img.height);
+  if (format != "png" && format != "ppm") {
+    *err = path + ": unknown image format \"" + format + "\" (png or ppm)";
+    return false;
+  }
+  std::vector<uint8_t> rgb(img.pixels.size() * 3);
+  for (size_t i = 0; i < img.pixels.size(); ++i)
+    for (int k = 0; k < 3; ++k) rgb[3 * i + k] = Encode(img.pixels[i][k], exposure);
+
+  // PNG is encoded in memory, because stbi_write_png ignores write errors.
+  std::string bytes;
+  if (format == "png") {
+    if (!stbi_write_png_to_func(AppendBytes, &bytes, img.width, img.height, 3,
+                                rgb.data(), img.width * 3)) {
+      *err = path + ": cannot encode PNG";
+      return false;
+    }
+  } else {
+    bytes = "P6\n" + std::to_string(img.width) + " " + std::to_string(img.height) + "\n255\n";
+    bytes.append(reinterpret_cast<const char*>(rgb.data()), rgb.size());
+  }
+  return WriteFile(path, bytes.data(), bytes.size(), err);
+}
+
+bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
+              std::string* err) {
+  CheckPolys(mesh);
+  std::string s = "ply\nformat ascii 1.0\n"
+                  "comment radiosity: vertex colours are exposed, sRGB-encoded radiosity\n";
+  s += "element vertex " + std::to_string(mesh.positions.size()) + "\n";
+  s += "property float x\nproperty float y\nproperty float z\n"
+       "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  s += "element face " + std::to_string(mesh.polys.size()) + "\n";
+  s += "property list uchar int vertex_indices\nend_header\n";
+  char line[128];
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    const glm::dvec3& p = mesh.positions[i];
+    const glm::vec3& c = mesh.colors[i];
+    // %.9g: a float survives the round trip through text.
+    std::snprintf(line, sizeof line, "%.9g %.9g %.9g %d %d %d\n", double(float(p.x)),
+                  double(float(p.y)), double(float(p.z)), Encode(c.r, exposure),
+                  Encode(c.g, exposure), Encode(c.b, exposure));
+    s += line;
+  }
+  for (const auto& q : mesh.polys) {
+    if (q[3] < 0)
+      std::snprintf(line, sizeof line, "3 %d %d %d\n", q[0], q[1], q[2]);
+    else
+      std::snprintf(line, sizeof line, "4 %d %d %d %d\n", q[0], q[1], q[2], q[3]);
+    s += line;
+  }
+  return WriteFile(path, s.data(), s.size(), err);
+}
