@@ -24,6 +24,12 @@ radiosity: $(B)/radiosity.o $(LIB_OBJS)
 $(B)/unit_tests: $(TEST_OBJS) $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS) $(shell pkg-config --libs gtest_main)
 
+$(B)/radiosity-bench: $(B)/bench/bench.o $(LIB_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(B)/bench/%.o: bench/%.cpp | $(B)
+	$(CXX) $(CPPFLAGS) -I. $(CXXFLAGS) -c -o $@ $<
+
 $(B)/%.o: %.cpp | $(B)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c -o $@ $<
 
@@ -31,7 +37,7 @@ $(B)/tests/%.o: tests/%.cpp | $(B)
 	$(CXX) $(CPPFLAGS) -I. $(shell pkg-config --cflags gtest) $(CXXFLAGS) -c -o $@ $<
 
 $(B):
-	mkdir -p $(B)/tests
+	mkdir -p $(B)/tests $(B)/bench
 
 # Installs the Debian packages the build and the tests need, only if some
 # are missing (the check is dpkg's, so a machine that has them all is left
@@ -49,7 +55,7 @@ demo: deps
 	@echo "pictures and results: $(CURDIR)/out/cornell (final.png, result.csv, log.csv, result.ply)"
 
 bench: deps
-	@$(MAKE) --no-print-directory radiosity
+	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench
 	@sh bench/run.sh
 
 install: radiosity
@@ -62,4 +68,4 @@ clean:
 
 .PHONY: all deps check demo bench install clean
 
--include $(wildcard $(B)/*.d $(B)/tests/*.d)
+-include $(wildcard $(B)/*.d $(B)/tests/*.d $(B)/bench/*.d)

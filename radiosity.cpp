@@ -251,6 +251,11 @@ int main(int argc, char** argv) {
       !WritePly(shaded, exposure, out_dir + "/result.ply", &err))
     Die(kExitFailure, err);
 
+  if (result.status == RunStatus::kLimit)  // said even with -q: these are not converged numbers
+    std::fprintf(stderr,
+                 "radiosity: warning: did not converge: %s with unshot energy %.3g of "
+                 "emitted (epsilon %g)\n",
+                 result.why.c_str(), result.unshot, run.epsilon);
   if (verbosity >= 1) {
     const char* how = result.status == RunStatus::kConverged ? "converged"
                       : result.status == RunStatus::kStopped ? "stopped on request"

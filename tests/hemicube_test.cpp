@@ -1,0 +1,114 @@
+#include "hemicube.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "master.h"
+#include "test_util.h"
+
+namespace {
+
+double Sum(const std::vector<FormFactor>& col) {
+  double s = 0;
+  for (const auto& f : col) s += f.f;
+  return s;
+}
+
+double SumOverFace(const Mesh& m, const std::vector<FormFactor>& col, int face) {
+  double s = 0;
+  for (const auto& f : col)
+    if (m.patches[m.elems[f.elem].patch].face == face) s += f.f;
+  return s;
+}
+
+// Differential area to a parallel rectangle [0,a]x[0,b] at height c, with
+// the corner above the point (Howell B-3).
+double CornerParallel(double a, double b, double c) {
+  double X = a / c, Y = b / c;
+  return (X / std::sqrt(1 + X * X) * std::atan(Y / std::sqrt(1 + X * X)) +
+          Y / std::sqrt(1 + Y * Y) * std::atan(X / std::sqrt(1 + Y * Y))) /
+         (2 * M_PI);
+}
+
+TEST(Hemicube, ClosedBoxColumnsSumToOne) {
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  for (int res : {64, 256}) {
+    Hemicube h(res);
+    std::vector<FormFactor> col;
+    for (size_t p = 0; p < m.patches.size(); p += 7)
+      for (double angle : {0.0, 0.3, 1.1}) {
+        h.Column(m, int(p), angle, &col);
+        EXPECT_NEAR(Sum(col), 1.0, 1e-5) << "patch " << p << " R " << res;
+      }
+  }
+}
+
+TEST(Hemicube, PointToParallelSquareMatchesAnalytic) {
+  // A small emitter patch at the origin facing up; a square of half-size
+  // `half` centred above it at height 1. Large squares reach the side faces.
+  for (double half : {0.25, 1.0, 3.0}) {
+    Scene s = EmptyScene();
+    const double e = 1e-3;
+    AddFace(&s, {{-e, -e, 0}, {e, -e, 0}, {e, e, 0}, {-e, e, 0}}, glm::dvec3(0), glm::dvec3(1));
+    AddFace(&s, {{-half, -half, 1}, {-half, half, 1}, {half, half, 1}, {half, -half, 1}},
+            glm::dvec3(1), glm::dvec3(0));
+    MeshOptions o;
+    o.patch_size = 100;  // one patch per face
+    o.elements_per_patch = 16;
+    Mesh m = MakeMesh(s, o);
+    ASSERT_EQ(m.faces[0].patches.size(), 1u);
+    Hemicube h(256);
+    std::vector<FormFactor> col;
+    h.Column(m, m.faces[0].patches[0], 0.2, &col);
+    const double exact = 4 * CornerParallel(half, half, 1.0);
+    EXPECT_NEAR(SumOverFace(m, col, 1), exact, 0.005 * exact) << "half " << half;
+  }
+}
+
+TEST(Hemicube, IndependentOfScale) {
+  std::vector<double> sums;
+  for (double scale : {1e-4, 1.0, 1e4}) {
+    Scene s = Box(scale, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+    Mesh m = MakeMesh(s);
+    Hemicube h(128);
+    std::vector<FormFactor> col;
+    h.Column(m, 5, 0.0, &col);
+    sums.push_back(SumOverFace(m, col, 1) + 2 * SumOverFace(m, col, 3));
+  }
+  EXPECT_NEAR(sums[0], sums[1], 1e-5);
+  EXPECT_NEAR(sums[2], sums[1], 1e-5);
+}
+
+TEST(Hemicube, BackFacesAndFacesBehindGetNothing) {
+  Scene s = EmptyScene();
+  AddFace(&s, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, glm::dvec3(0), glm::dvec3(1));
+  // Above but facing up (away from the shooter), and below facing down.
+  AddFace(&s, {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}, glm::dvec3(1), glm::dvec3(0));
+  AddFace(&s, {{0, 0, -1}, {0, 1, -1}, {1, 1, -1}, {1, 0, -1}}, glm::dvec3(1), glm::dvec3(0));
+  Mesh m = MakeMesh(s);
+  Hemicube h(64);
+  std::vector<FormFactor> col;
+  for (int p : m.faces[0].patches) {
+    h.Column(m, p, 0.0, &col);
+    EXPECT_TRUE(col.empty());
+  }
+}
+
+TEST(Hemicube, ColumnIsSortedAndPositive) {
+  Scene s = Box(2.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  Hemicube h(64);
+  std::vector<FormFactor> col;
+  h.Column(m, 3, ShotAngle(1, 3, 0), &col);
+  ASSERT_FALSE(col.empty());
+  for (size_t i = 0; i < col.size(); ++i) {
+    EXPECT_GT(col[i].f, 0.0f);
+    if (i) {
+      EXPECT_LT(col[i - 1].elem, col[i].elem);
+    }
+  }
+}
+
+}  // namespace

@@ -1,0 +1,112 @@
+#include "master.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "results.h"
+#include "test_util.h"
+
+namespace {
+
+RunResult Solve(const Mesh& m, Solver* s, double eps, int res = 64) {
+  RunOptions o;
+  o.resolution = res;
+  o.epsilon = eps;
+  return RunSequential(m, o, s, nullptr);
+}
+
+// Closed box, ρ and Ke everywhere: B = Ke / (1 − ρ) exactly.
+TEST(Solver, FurnaceMatchesClosedForm) {
+  struct Case { glm::dvec3 rho; double tol; };
+  for (Case c : {Case{glm::dvec3(0.5), 0.005}, Case{glm::dvec3(0.9), 0.005},
+                 Case{glm::dvec3(0.99), 0.005}, Case{glm::dvec3(0.999), 0.025},
+                 Case{glm::dvec3(0.3, 0.6, 0.9), 0.005}}) {
+    Scene s = Box(1.0, {c.rho}, {glm::dvec3(1.0)});
+    Mesh m = MakeMesh(s);
+    Solver solver(m, true);
+    RunResult r = Solve(m, &solver, 1e-4);
+    ASSERT_EQ(r.status, RunStatus::kConverged) << r.why;
+    const glm::dvec3 exact = 1.0 / (1.0 - c.rho);
+    for (const glm::dvec3& b : FaceRadiosity(m, solver.radiosity()))
+      for (int k = 0; k < 3; ++k)
+        EXPECT_NEAR(b[k], exact[k], c.tol * exact[k]) << "rho " << c.rho[k];
+  }
+}
+
+// Two squares facing each other inside nothing: an open scene, where the
+// ambient estimate is wrong most and overshooting must still agree.
+TEST(Solver, OvershootingDoesNotChangeTheAnswer) {
+  Scene s = Box(1.0, {glm::dvec3(0.7), glm::dvec3(0.4), glm::dvec3(0.8), glm::dvec3(0.2),
+                      glm::dvec3(0.6), glm::dvec3(0.5)},
+                {glm::dvec3(0), glm::dvec3(5), glm::dvec3(0), glm::dvec3(0), glm::dvec3(0),
+                 glm::dvec3(0)});
+  s.faces.pop_back();  // open the box: light escapes through z = 1
+  Mesh m = MakeMesh(s);
+  Solver on(m, true), off(m, false);
+  ASSERT_EQ(Solve(m, &on, 1e-5).status, RunStatus::kConverged);
+  ASSERT_EQ(Solve(m, &off, 1e-5).status, RunStatus::kConverged);
+  auto a = FaceRadiosity(m, on.radiosity()), b = FaceRadiosity(m, off.radiosity());
+  for (size_t f = 0; f < a.size(); ++f) EXPECT_NEAR(a[f].r, b[f].r, 0.005 * b[f].r) << f;
+}
+
+// In a closed box all emitted power is absorbed: Σ A (1−ρ)/ρ (B − Ke) = Σ A Ke.
+TEST(Solver, ClosedBoxAbsorbsWhatItEmits) {
+  Scene s = Box(1.0, {glm::dvec3(0.8), glm::dvec3(0.5), glm::dvec3(0.2), glm::dvec3(0.6),
+                      glm::dvec3(0.6), glm::dvec3(0.9, 0.5, 0.1)},
+                {glm::dvec3(0), glm::dvec3(10), glm::dvec3(0), glm::dvec3(0), glm::dvec3(0),
+                 glm::dvec3(0)});
+  Mesh m = MakeMesh(s);
+  for (bool over : {true, false}) {
+    Solver solver(m, over);
+    ASSERT_EQ(Solve(m, &solver, 1e-6).status, RunStatus::kConverged);
+    auto b = FaceRadiosity(m, solver.radiosity());
+    glm::dvec3 absorbed(0.0), emitted(0.0);
+    for (size_t f = 0; f < s.faces.size(); ++f) {
+      const Material& mat = s.materials[s.faces[f].material];
+      absorbed += s.faces[f].area * (1.0 - mat.kd) / mat.kd * (b[f] - mat.ke);
+      emitted += s.faces[f].area * mat.ke;
+    }
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(absorbed[k], emitted[k], 0.01 * emitted[k]);
+    for (const auto& e : solver.radiosity())
+      for (int k = 0; k < 3; ++k) EXPECT_TRUE(std::isfinite(e[k]) && e[k] >= 0);
+  }
+}
+
+TEST(Solver, ReflectingEverythingDoesNotConverge) {
+  Scene s = Box(1.0, {glm::dvec3(1.0)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  for (bool over : {true, false}) {
+    Solver solver(m, over);
+    RunResult r = Solve(m, &solver, 1e-3, 16);
+    EXPECT_EQ(r.status, RunStatus::kNotConverged) << "overshoot " << over;
+    EXPECT_FALSE(r.why.empty());
+  }
+}
+
+TEST(Solver, SelectSkipsTakenPatches) {
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(0), glm::dvec3(3), glm::dvec3(0),
+                                         glm::dvec3(0), glm::dvec3(0), glm::dvec3(0)});
+  Mesh m = MakeMesh(s);
+  Solver solver(m, true);
+  int first = solver.Select();
+  ASSERT_GE(first, 0);
+  EXPECT_EQ(m.patches[first].face, 1);  // the ceiling emits
+  std::vector<char> taken(m.patches.size(), 0);
+  taken[first] = 1;
+  int second = solver.Select(&taken);
+  EXPECT_NE(second, first);
+  EXPECT_EQ(m.patches[second].face, 1);
+}
+
+TEST(Solver, DarkSceneConvergesToBlack) {
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(0.0)});
+  Mesh m = MakeMesh(s);
+  Solver solver(m, true);
+  RunResult r = Solve(m, &solver, 1e-3, 16);
+  EXPECT_EQ(r.status, RunStatus::kConverged);
+  EXPECT_EQ(r.shots, 0);
+  for (const auto& b : FaceRadiosity(m, solver.radiosity())) EXPECT_EQ(b.r, 0.0);
+}
+
+}  // namespace

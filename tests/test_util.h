@@ -1,0 +1,66 @@
+// Scenes built in code for unit tests: no files, exact geometry.
+#ifndef RADIOSITY_TESTS_TEST_UTIL_H
+#define RADIOSITY_TESTS_TEST_UTIL_H
+
+#include <vector>
+
+#include "mesh.h"
+#include "scene.h"
+
+// Adds a planar polygon (counter-clockwise seen from its front) with its
+// own material.
+inline void AddFace(Scene* s, std::vector<glm::dvec3> verts, glm::dvec3 kd, glm::dvec3 ke) {
+  Material m;
+  m.name = "m" + std::to_string(s->materials.size());
+  m.kd = kd;
+  m.ke = ke;
+  s->materials.push_back(m);
+  Face f;
+  f.verts = std::move(verts);
+  glm::dvec3 n = AreaVector(f.verts);
+  f.area = glm::length(n);
+  f.normal = n / f.area;
+  f.material = int(s->materials.size()) - 1;
+  f.index = int(s->faces.size());
+  f.line = f.index + 1;
+  if (s->faces.empty()) s->lo = s->hi = f.verts[0];
+  for (const auto& p : f.verts) {
+    s->lo = glm::min(s->lo, p);
+    s->hi = glm::max(s->hi, p);
+  }
+  s->faces.push_back(f);
+}
+
+inline Scene EmptyScene() {
+  Scene s;
+  s.materials.push_back(Material{"default", glm::dvec3(0.5), glm::dvec3(0.0)});
+  s.objects.push_back("default");
+  return s;
+}
+
+// The inside of the box [0,size]^3, every face facing in. kd/ke per face
+// (six entries) or one for all.
+inline Scene Box(double size, std::vector<glm::dvec3> kd, std::vector<glm::dvec3> ke) {
+  Scene s = EmptyScene();
+  const double L = size;
+  const std::vector<std::vector<glm::dvec3>> faces = {
+      {{0, 0, 0}, {0, 0, L}, {L, 0, L}, {L, 0, 0}},  // floor, +y
+      {{0, L, 0}, {L, L, 0}, {L, L, L}, {0, L, L}},  // ceiling, -y
+      {{0, 0, 0}, {0, L, 0}, {0, L, L}, {0, 0, L}},  // x = 0, +x
+      {{L, 0, 0}, {L, 0, L}, {L, L, L}, {L, L, 0}},  // x = L, -x
+      {{0, 0, 0}, {L, 0, 0}, {L, L, 0}, {0, L, 0}},  // z = 0, +z
+      {{0, 0, L}, {0, L, L}, {L, L, L}, {L, 0, L}},  // z = L, -z
+  };
+  for (size_t i = 0; i < faces.size(); ++i)
+    AddFace(&s, faces[i], kd[kd.size() == 1 ? 0 : i], ke[ke.size() == 1 ? 0 : i]);
+  return s;
+}
+
+inline Mesh MakeMesh(const Scene& s, MeshOptions o = MeshOptions()) {
+  Mesh m;
+  std::string err;
+  if (!BuildMesh(s, o, &m, &err)) std::abort();
+  return m;
+}
+
+#endif
