@@ -59,8 +59,7 @@ double PixelIntegral(double a0, double a1, double b0, double b1, bool side) {
 Hemicube::Hemicube(int resolution) : res_(resolution) {
   CHECK(res_ >= 8 && res_ <= kMaxResolution && res_ % 2 == 0);
   const int R = res_, H = R / 2;
-  dff_.resize(3 * size_t(R) * R);
-  std::vector<double> d(dff_.size());
+  std::vector<double> d(3 * size_t(R) * R);
   double total = 0;
   const double px = 2.0 / R;
   for (int y = 0; y < R; ++y)
@@ -74,59 +73,96 @@ Hemicube::Hemicube(int resolution) : res_(resolution) {
             PixelIntegral(-1 + x * px, -1 + (x + 1) * px, y * px, (y + 1) * px, true);
   // The exact integrals sum to 1; renormalising removes the quadrature's
   // last digits so a closed scene's column sums to 1 to float precision.
-  for (size_t i = 0; i < d.size(); ++i) dff_[i] = float(d[i] / total);
-  depth_.resize(dff_.size());
-  item_.resize(dff_.size());
+  // Readback sums runs of one id along a row as a difference of prefix
+  // sums: a run costs one subtraction instead of a dependent add per pixel.
+  prefix_.resize(d.size() + d.size() / R);
+  for (size_t row = 0, n = d.size() / R; row < n; ++row) {
+    double* p = &prefix_[row * (R + 1)];
+    p[0] = 0;
+    for (int x = 0; x < R; ++x) p[x + 1] = p[x] + d[row * R + x] / total;
+  }
+  depth_.resize(d.size());
+  item_.resize(d.size());
 }
 
-struct Hemicube::Edge {
-  float y0, y1, x0, dxdy;
+namespace {
+
+// ceil(v) for |v| < 2^30 without a libm call (baseline x86-64 has no
+// rounding instruction). Callers keep v in range: projected points are
+// bounded by the near plane.
+inline int Ceil(float v) {
+  const int i = int(v);
+  return i + (float(i) < v);
+}
+
+// One chain of a convex polygon's edges, walked down the rows. Each edge
+// is set up from its endpoints in a canonical order (upper one first), so
+// an edge shared by two neighbours gives them bit-identical crossings.
+struct Chain {
+  const float (*pt)[2];
+  int n, at, step, end;  // current upper vertex, direction, bottom vertex
+  float y1 = 0, x0 = 0, y0 = 0, dxdy = 0;
+
+  void Next() {  // the next non-horizontal edge below
+    while (at != end) {
+      const float* p = pt[at];
+      at += step;  // wrap without a division: this runs per edge
+      if (at == n) at = 0;
+      if (at < 0) at = n - 1;
+      const float* q = pt[at];
+      if (q[1] == p[1]) continue;
+      const float* u = p[1] < q[1] ? p : q;
+      const float* l = p[1] < q[1] ? q : p;
+      y0 = u[1];
+      y1 = l[1];
+      x0 = u[0];
+      dxdy = (l[0] - u[0]) / (l[1] - u[1]);
+      return;
+    }
+  }
+  float X(float yc) {
+    while (yc >= y1 && at != end) Next();
+    return x0 + (yc - y0) * dxdy;
+  }
 };
 
+}  // namespace
+
 // Fills the convex polygon pt[0..n) (pixel coordinates) of face `face`
-// with element `id`, depth 1/d = za*X + zb*Y + zc, pixel centres in
-// [left, right) x [top, bottom): shared edges give each pixel to one side.
+// with element `id`, depth 1/d = za*X + zb*Y + zc: pixel centres in
+// [left, right) x [top, bottom), so shared edges give each pixel to one side.
 void Hemicube::Scan(int face, const float (*pt)[2], int n, float za, float zb,
                     float zc, int32_t id) {
   const int R = res_, H = face == 0 ? R : R / 2;
   float* depth = depth_.data() + (face == 0 ? 0 : size_t(R) * R + size_t(face - 1) * H * R);
   int32_t* item = item_.data() + (depth - depth_.data());
-  Edge e[8];
-  int ne = 0;
-  float ymin = pt[0][1], ymax = pt[0][1];
-  for (int i = 0; i < n; ++i) {
-    const float* p = pt[i];
-    const float* q = pt[(i + 1) % n];
-    ymin = std::min(ymin, p[1]);
-    ymax = std::max(ymax, p[1]);
-    if (p[1] == q[1]) continue;
-    // The same edge of two neighbours must give bit-identical crossings,
-    // so each edge is set up from its endpoints in a canonical order.
-    if (p[1] > q[1]) std::swap(p, q);
-    e[ne++] = {p[1], q[1], p[0], (q[0] - p[0]) / (q[1] - p[1])};
+  int top = 0, bottom = 0;
+  for (int i = 1; i < n; ++i) {
+    if (pt[i][1] < pt[top][1]) top = i;
+    if (pt[i][1] > pt[bottom][1]) bottom = i;
   }
-  int ya = std::max(0, int(std::ceil(ymin - 0.5f)));
-  int yb = std::min(H, int(std::ceil(ymax - 0.5f)));
+  const float lim = 1e9f;  // keeps Ceil in range; far outside any face
+  const int ya = std::max(0, Ceil(std::max(pt[top][1], -lim) - 0.5f));
+  const int yb = std::min(H, Ceil(std::min(pt[bottom][1], lim) - 0.5f));
+  if (ya >= yb) return;
+  Chain a{pt, n, top, 1, bottom}, b{pt, n, top, -1, bottom};
+  a.Next();
+  b.Next();
   for (int y = ya; y < yb; ++y) {
     const float yc = y + 0.5f;
-    float xl = 1e30f, xr = -1e30f;
-    for (int k = 0; k < ne; ++k)
-      if (yc >= e[k].y0 && yc < e[k].y1) {
-        float x = e[k].x0 + (yc - e[k].y0) * e[k].dxdy;
-        xl = std::min(xl, x);
-        xr = std::max(xr, x);
-      }
-    int xa = std::max(0, int(std::ceil(xl - 0.5f)));
-    int xb = std::min(R, int(std::ceil(xr - 0.5f)));
+    float xl = a.X(yc), xr = b.X(yc);
+    if (xl > xr) std::swap(xl, xr);
+    const int xa = std::max(0, Ceil(std::max(xl, -lim) - 0.5f));
+    const int xb = std::min(R, Ceil(std::min(xr, lim) - 0.5f));
     float* drow = depth + size_t(y) * R;
     int32_t* irow = item + size_t(y) * R;
-    const float zrow = zb * yc + zc;
+    const float zrow = zb * yc + zc + 0.5f * za;
+    // Branch-free so that the compiler can vectorise the depth test.
     for (int x = xa; x < xb; ++x) {
-      float z = za * (x + 0.5f) + zrow;
-      if (z > drow[x]) {
-        drow[x] = z;
-        irow[x] = id;
-      }
+      const float z = za * float(x) + zrow;
+      const bool nearer = z > drow[x];
+      drow[x] = nearer ? z : drow[x];
+      irow[x] = nearer ? id : irow[x];
     }
   }
 }
@@ -149,8 +185,11 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
   const double coplanar = 1e-10 * (mesh.scene_diagonal + glm::length(c));
   if (local_.size() < 3 * mesh.verts.size()) {
     local_.resize(3 * mesh.verts.size());
+    screen_.resize(10 * mesh.verts.size());
     code_.resize(mesh.verts.size());
   }
+  const int R = res_;
+  const float half = 0.5f * R;
   if (acc_.size() < mesh.elems.size()) acc_.resize(mesh.elems.size(), 0.0);
 
   // Pass 1: faces that face the shooter; their vertices into its frame.
@@ -174,6 +213,16 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
         code |= Outcode(h, q, near) << (5 * h);
       }
       code_[i] = code;
+      // Pixel coordinates on all five faces from three reciprocals (the
+      // faces look along z, ±x, ±y). Used only where the vertex is past
+      // the near plane, so a division by 0 elsewhere is harmless.
+      const float iz = half / p[2], ix = half / p[0], iy = half / p[1];
+      float* s = &screen_[10 * size_t(i)];
+      s[0] = p[0] * iz + half;  s[1] = p[1] * iz + half;   // top
+      s[2] = p[1] * ix + half;  s[3] = p[2] * ix;          // +x
+      s[4] = -p[1] * ix + half; s[5] = -p[2] * ix;         // -x
+      s[6] = p[0] * iy + half;  s[7] = p[2] * iy;          // +y
+      s[8] = -p[0] * iy + half; s[9] = -p[2] * iy;         // -y
     }
   }
   auto t1 = Clock::now();
@@ -181,8 +230,6 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
   // Pass 2: every leaf element of those faces into the item buffers.
   std::fill(depth_.begin(), depth_.end(), 0.0f);
   std::fill(item_.begin(), item_.end(), -1);
-  const int R = res_;
-  const float half = 0.5f * R;
   long elements = 0;
   std::vector<int>& leaves = leaves_;
   for (int f : front) {
@@ -191,6 +238,17 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
     const glm::dvec3 nld(glm::dot(mf.normal, u), glm::dot(mf.normal, v), glm::dot(mf.normal, n));
     const float nl[3] = {float(nld.x), float(nld.y), float(nld.z)};
     const double k = mf.offset - glm::dot(mf.normal, c);
+    // 1/d = (na*sa + nb*sb + nd)/k with sa = X/half - 1, sb = Y/half - boff,
+    // per hemicube face: the same for every element of this face.
+    float za[5], zb[5], zc[5];
+    for (int h = 0; h < 5; ++h) {
+      float nf[3];
+      ToFace(h, nl, nf);
+      const float boff = h == 0 ? 1.0f : 0.0f;
+      za[h] = float(nf[0] / (half * k));
+      zb[h] = float(nf[1] / (half * k));
+      zc[h] = float((nf[2] - nf[0] - nf[1] * boff) / k);
+    }
     for (int p : mf.patches) {
       mesh.Leaves(p, &leaves);
       for (int id : leaves) {
@@ -204,56 +262,63 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
         }
         for (int h = 0; h < 5; ++h) {
           if ((all >> (5 * h)) & 31) continue;  // wholly outside one plane
-          // Element in this face's frame; clipped at the near plane.
+          float pt[8][2];
+          if (!((any >> (5 * h)) & kNear)) {
+            for (int i = 0; i < nv; ++i) {
+              pt[i][0] = screen_[10 * size_t(el.v[i]) + 2 * h];
+              pt[i][1] = screen_[10 * size_t(el.v[i]) + 2 * h + 1];
+            }
+            Scan(h, pt, nv, za[h], zb[h], zc[h], id);
+            continue;
+          }
+          // Crosses the near plane: clip in this face's frame, then project.
           float in[4][3], poly[8][3];
           for (int i = 0; i < nv; ++i) ToFace(h, &local_[3 * size_t(el.v[i])], in[i]);
           int m = 0;
-          if ((any >> (5 * h)) & kNear) {
-            for (int i = 0; i < nv; ++i) {
-              int j = (i + 1) % nv;
-              const float* a = in[i];
-              const float* bq = in[j];
-              if (a[2] >= near) std::copy(a, a + 3, poly[m++]);
-              if ((a[2] >= near) != (bq[2] >= near)) {
-                // Intersect from the lower vertex id: neighbours agree exactly.
-                const float* lo = el.v[i] < el.v[j] ? a : bq;
-                const float* hi = el.v[i] < el.v[j] ? bq : a;
-                float s = (near - lo[2]) / (hi[2] - lo[2]);
-                poly[m][0] = lo[0] + s * (hi[0] - lo[0]);
-                poly[m][1] = lo[1] + s * (hi[1] - lo[1]);
-                poly[m][2] = near;
-                ++m;
-              }
+          for (int i = 0; i < nv; ++i) {
+            const int j = (i + 1) % nv;
+            const float* a = in[i];
+            const float* bq = in[j];
+            if (a[2] >= near) std::copy(a, a + 3, poly[m++]);
+            if ((a[2] >= near) != (bq[2] >= near)) {
+              // Intersect from the lower vertex id: neighbours agree exactly.
+              const float* lo = el.v[i] < el.v[j] ? a : bq;
+              const float* hi = el.v[i] < el.v[j] ? bq : a;
+              const float s = (near - lo[2]) / (hi[2] - lo[2]);
+              poly[m][0] = lo[0] + s * (hi[0] - lo[0]);
+              poly[m][1] = lo[1] + s * (hi[1] - lo[1]);
+              poly[m][2] = near;
+              ++m;
             }
-            if (m < 3) continue;
-          } else {
-            for (int i = 0; i < nv; ++i) std::copy(in[i], in[i] + 3, poly[i]);
-            m = nv;
           }
-          float pt[8][2];
-          const float boff = h == 0 ? 1.0f : 0.0f;
+          if (m < 3) continue;
+          // The same arithmetic as screen_, so unclipped corners match it bit
+          // for bit and neighbours stay watertight.
+          const float yoff = h == 0 ? half : 0.0f;
           for (int i = 0; i < m; ++i) {
-            float inv = 1.0f / poly[i][2];
-            pt[i][0] = (poly[i][0] * inv + 1.0f) * half;
-            pt[i][1] = (poly[i][1] * inv + boff) * half;
+            const float inv = half / poly[i][2];
+            pt[i][0] = poly[i][0] * inv + half;
+            pt[i][1] = poly[i][1] * inv + yoff;
           }
-          float nf[3];
-          ToFace(h, nl, nf);
-          // 1/d = (na*sa + nb*sb + nd)/k with sa = X/half - 1, sb = Y/half - boff.
-          const float za = float(nf[0] / (half * k));
-          const float zb = float(nf[1] / (half * k));
-          const float zc = float((nf[2] - nf[0] - nf[1] * boff) / k);
-          Scan(h, pt, m, za, zb, zc, id);
+          Scan(h, pt, m, za[h], zb[h], zc[h], id);
         }
       }
     }
   }
   auto t2 = Clock::now();
 
-  // Pass 3: sum delta form factors per element.
-  const size_t npix = dff_.size();
-  for (size_t i = 0; i < npix; ++i)
-    if (item_[i] >= 0) acc_[item_[i]] += dff_[i];
+  // Pass 3: sum delta form factors per element, a run of equal ids at a time.
+  const size_t npix = item_.size();
+  for (size_t row = 0, n = npix / R; row < n; ++row) {
+    const int32_t* it = &item_[row * R];
+    const double* pre = &prefix_[row * (R + 1)];
+    int x0 = 0;
+    for (int x = 1; x <= R; ++x)
+      if (x == R || it[x] != it[x0]) {
+        if (it[x0] >= 0) acc_[it[x0]] += pre[x] - pre[x0];
+        x0 = x;
+      }
+  }
   out->clear();
   for (size_t id = 0; id < mesh.elems.size(); ++id)
     if (acc_[id] > 0) {

@@ -46,15 +46,17 @@ class Hemicube {
   static constexpr int kMaxResolution = 4096;
 
  private:
-  struct Edge;
   void Scan(int face, const float (*pt)[2], int n, float za, float zb, float zc,
             int32_t id);
 
   int res_;
-  std::vector<float> dff_;    // 3 R² delta form factors: top, then 4 sides
+  // Delta form factors as prefix sums along each row (R + 1 per row):
+  // the top face's R rows, then 4 side faces of R/2 rows.
+  std::vector<double> prefix_;
   std::vector<float> depth_;  // 1/distance, larger is nearer; 0 = empty
   std::vector<int32_t> item_; // element id or -1
   std::vector<float> local_;  // 3 floats per vertex, in the shooter frame
+  std::vector<float> screen_; // 10 floats per vertex: pixel x, y on each face
   std::vector<uint32_t> code_;// outcodes per vertex, 5 bits per face
   std::vector<double> acc_;   // per element
   std::vector<int> front_, leaves_;  // scratch, kept to avoid reallocation
