@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <unordered_map>
 
@@ -218,9 +219,10 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
     estimate += n * n * (f.verts.size() > 4 ? double(f.verts.size() - 2) : 1.0);
   }
   if (estimate > kMaxElements) {
-    *err = "patch size " + std::to_string(ps) + " would make about " +
-           std::to_string((long long)estimate) + " elements (limit " +
-           std::to_string(kMaxElements) + ")";
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "patch size %g would make about %.3g elements (limit %d)", ps,
+                  estimate, kMaxElements);
+    *err = buf;
     return false;
   }
 
@@ -232,6 +234,7 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
     mf.normal = f.normal;
     mf.rho = mat.kd;
     mf.emission = mat.ke;
+    mf.material = f.material;
     mf.area = f.area;
     mf.offset = glm::dot(f.normal, f.verts[0]);
     int face = int(mesh->faces.size());

@@ -48,6 +48,7 @@ struct MeshFace {
   glm::dvec3 normal{0.0};
   glm::dvec3 rho{0.0};           // Kd
   glm::dvec3 emission{0.0};      // Ke
+  int material = 0;              // Scene::materials index
   double area = 0.0;
   double offset = 0.0;           // plane: dot(normal, x) == offset
   int vbegin = 0, vend = 0;      // its vertices: Mesh::verts[vbegin, vend)

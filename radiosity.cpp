@@ -234,6 +234,9 @@ int main(int argc, char** argv) {
       std::fputc('\n', stderr);
     }
   };
+  if (solver.Dark())  // a legal scene, but most likely a missing Ke
+    std::fprintf(stderr, "radiosity: warning: %s: no face emits light (Ke); every B is 0\n",
+                 scene_path.c_str());
   RunResult result = RunSequential(mesh, run, &solver, sample);
   if (!log.Close(&err)) Die(kExitFailure, err);
   if (result.status == RunStatus::kNotConverged)
@@ -261,7 +264,7 @@ int main(int argc, char** argv) {
                       : result.status == RunStatus::kStopped ? "stopped on request"
                                                              : result.why.c_str();
     std::fprintf(stderr,
-                 "radiosity: %s: %ld shots in %.2f s, unshot %.2e of emitted; "
+                 "radiosity: %s: %ld shots in %.2f s, unshot %.3g of emitted; "
                  "%zu patches, %zu elements; results in %s/\n",
                  how, result.shots, result.seconds, result.unshot, mesh.patches.size(),
                  mesh.elems.size(), out_dir.c_str());

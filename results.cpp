@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <sstream>
+#include <unordered_map>
 
 std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   std::vector<glm::dvec3> sum(mesh.faces.size(), glm::dvec3(0.0));
@@ -24,6 +24,39 @@ std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::d
   return out;
 }
 
+namespace {
+
+// RFC 4180: a field with a comma, quote or line break is quoted, quotes doubled.
+std::string CsvField(const std::string& s) {
+  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+// Splits one CSV line; false on an unterminated quote.
+bool CsvSplit(const std::string& line, std::vector<std::string>* cols) {
+  cols->assign(1, "");
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c != '"') cols->back() += c;
+      else if (i + 1 < line.size() && line[i + 1] == '"') cols->back() += line[++i];
+      else quoted = false;
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      cols->emplace_back();
+    } else {
+      cols->back() += c;
+    }
+  }
+  return !quoted;
+}
+
+}  // namespace
+
 bool WriteResultCsv(const std::string& path, const Scene& scene,
                     const std::vector<glm::dvec3>& face_b, std::string* err) {
   std::FILE* f = std::fopen(path.c_str(), "w");
@@ -34,8 +67,9 @@ bool WriteResultCsv(const std::string& path, const Scene& scene,
   std::fprintf(f, "face,object,area,B_r,B_g,B_b\n");
   for (size_t i = 0; i < scene.faces.size(); ++i) {
     const Face& fc = scene.faces[i];
-    std::fprintf(f, "%d,%s,%.9g,%.9g,%.9g,%.9g\n", fc.index, scene.objects[fc.object].c_str(),
-                 fc.area, face_b[i].r, face_b[i].g, face_b[i].b);
+    std::fprintf(f, "%d,%s,%.9g,%.9g,%.9g,%.9g\n", fc.index,
+                 CsvField(scene.objects[fc.object]).c_str(), fc.area, face_b[i].r, face_b[i].g,
+                 face_b[i].b);
   }
   if (std::fclose(f) != 0) {
     *err = path + ": " + std::strerror(errno);
@@ -68,9 +102,7 @@ bool ReadReference(const std::string& path, const Scene& scene,
     }
     if (line.empty()) continue;
     std::vector<std::string> col;
-    std::stringstream ss(line);
-    std::string c;
-    while (std::getline(ss, c, ',')) col.push_back(c);
+    if (!CsvSplit(line, &col)) return fail("unterminated quote");
     if (col.size() != 6) return fail("expected 6 columns");
     if (row >= scene.faces.size()) return fail("more rows than the scene has faces");
     double v[4];
@@ -157,8 +189,43 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
       w[el.v[k]] += el.area;
     }
   }
+  // Faces do not share vertices, but where two faces of one material lie in
+  // one plane (a floor cut round a rug, a ceiling round a light) a seam
+  // would show: their coincident vertices are averaged together.
+  struct Key {
+    glm::dvec3 p;
+    long long n[3];
+    int material;
+    bool operator==(const Key& o) const {
+      return p == o.p && n[0] == o.n[0] && n[1] == o.n[1] && n[2] == o.n[2] &&
+             material == o.material;
+    }
+  };
+  struct Hash {
+    size_t operator()(const Key& k) const {
+      std::hash<double> h;
+      return h(k.p.x) * 31 + h(k.p.y) * 17 + h(k.p.z) + size_t(k.n[0] ^ k.n[1] ^ k.n[2]) +
+             size_t(k.material) * 101;
+    }
+  };
+  std::unordered_map<Key, int, Hash> group_of;
+  std::vector<int> group(mesh.verts.size());
+  for (const MeshFace& f : mesh.faces)
+    for (int v = f.vbegin; v < f.vend; ++v) {
+      Key k{mesh.verts[v],
+            {std::llround(f.normal.x * 1e6), std::llround(f.normal.y * 1e6),
+             std::llround(f.normal.z * 1e6)},
+            f.material};
+      group[v] = group_of.emplace(k, int(group_of.size())).first->second;
+    }
+  std::vector<glm::dvec3> gsum(group_of.size(), glm::dvec3(0.0));
+  std::vector<double> gw(group_of.size(), 0.0);
+  for (size_t v = 0; v < sum.size(); ++v) {
+    gsum[group[v]] += sum[v];
+    gw[group[v]] += w[v];
+  }
   s.colors.resize(mesh.verts.size(), glm::vec3(0.0f));
   for (size_t v = 0; v < sum.size(); ++v)
-    if (w[v] > 0) s.colors[v] = glm::vec3(sum[v] / w[v]);
+    if (gw[group[v]] > 0) s.colors[v] = glm::vec3(gsum[group[v]] / gw[group[v]]);
   return s;
 }

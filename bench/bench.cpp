@@ -1,5 +1,6 @@
-// bench: the engine's figures for one scene, as table rows on stdout.
-//   bench SCENE.obj R [R...]
+// radiosity-bench: the engine's figures for one scene, as table rows on
+// stdout (bench/run.sh adds the headers).
+//   radiosity-bench SCENE.obj R [R...]
 // Per resolution: mean form-factor column time split into stages against
 // the cost model (15 ns/element + 70 ns/covered element + 3 ns/pixel),
 // master time per shot, and shots and seconds to 1% relative RMS against
@@ -89,13 +90,13 @@ int main(int argc, char** argv) {
     for (int p = 0; p < n; p += step, ++columns) hc.Column(mesh, p, ShotAngle(1, p, 0), &col, &st);
     double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double per = total / columns;
-    const double model = (15e-9 * st.elements + 70e-9 * st.covered + 3e-9 * st.pixels) / columns;
-    std::printf("column | %-12s | R %4d | %6zu elements | %5.0f front | %5.0f covered | "
-                "%7.3f ms (transform %.3f, raster %.3f, readback %.3f) | model %.3f ms | x%.2f\n",
-                name.c_str(), res, mesh.elems.size(), double(st.elements) / columns,
-                double(st.covered) / columns, 1e3 * per, 1e3 * st.transform_s / columns,
-                1e3 * st.raster_s / columns, 1e3 * st.readback_s / columns, 1e3 * model,
-                per / model);
+    const double model =
+        (15e-9 * double(mesh.elems.size()) * columns + 70e-9 * st.covered + 3e-9 * st.pixels) /
+        columns;
+    std::printf("column | %s | %d | %zu | %.0f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f\n",
+                name.c_str(), res, mesh.elems.size(), double(st.covered) / columns, 1e3 * per,
+                1e3 * st.transform_s / columns, 1e3 * st.raster_s / columns,
+                1e3 * st.readback_s / columns, 1e3 * model, per / model);
     std::fflush(stdout);
 
     // The converged answer: overshooting, run far past the default epsilon.
@@ -107,10 +108,9 @@ int main(int argc, char** argv) {
     std::vector<glm::dvec3> ref = FaceRadiosity(mesh, ref_solver.radiosity());
     for (bool over : {true, false}) {
       ToTarget t = Reach(scene, mesh, res, over, ref, 0.01);
-      std::printf("to 1%% rel RMS | %-12s | R %4d | %-13s | %6ld shots | %7.3f s | "
-                  "master %6.1f us/shot | reference: %ld shots %.1f s\n",
-                  name.c_str(), res, over ? "overshooting" : "plain", t.shots, t.seconds,
-                  t.master_per_shot_us, rr.shots, rr.seconds);
+      std::printf("converge | %s | %d | %s | %ld | %.3f | %.1f | %ld | %.1f\n", name.c_str(), res,
+                  over ? "overshooting" : "plain", t.shots, t.seconds, t.master_per_shot_us,
+                  rr.shots, rr.seconds);
       std::fflush(stdout);
     }
   }

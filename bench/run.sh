@@ -1,0 +1,32 @@
+#!/bin/sh
+# make bench: the engine's tables for the shipped scenes at R = 128 and 256.
+#  column   - mean form-factor column time, split into stages, against the
+#             cost model 15 ns/element + 70 ns/covered element + 3 ns/pixel
+#  converge - shots and seconds to 1% relative RMS error against the scene's
+#             converged solution (epsilon 1e-6), with and without
+#             overshooting; master time (select + shoot) per shot
+# Rows also go to bench/results/engine.csv. Timings are from this machine,
+# one run each; compare ratios, not absolute times across machines.
+cd "$(dirname "$0")/.." || exit 1
+mkdir -p bench/results
+out=bench/results/engine.csv
+rows=$(mktemp)
+trap 'rm -f "$rows"' EXIT
+for scene in cornell room maze; do
+  ./build/radiosity-bench "scenes/$scene.obj" 128 256 | tee -a "$rows" >/dev/null || exit 1
+done
+echo "Form-factor column (ms per column, means over up to 400 patches)"
+echo "| scene | R | elements | covered | column | transform | raster | readback | model | ratio |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
+grep '^column' "$rows" | sed 's/^column | /| /; s/$/ |/'
+echo
+echo "To 1% relative RMS (reference: overshooting to epsilon 1e-6)"
+echo "| scene | R | method | shots | seconds | master us/shot | reference shots | reference s |"
+echo "|---|---|---|---|---|---|---|---|"
+grep '^converge' "$rows" | sed 's/^converge | /| /; s/$/ |/'
+{
+  echo "table,scene,R,a,b,c,d,e,f,g,h"
+  sed 's/ | /,/g' "$rows"
+} >"$out"
+echo
+echo "CSV: $out"
