@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 
 #include "check.h"
 
@@ -82,7 +83,7 @@ Hemicube::Hemicube(int resolution) : res_(resolution) {
     for (int x = 0; x < R; ++x) p[x + 1] = p[x] + d[row * R + x] / total;
   }
   depth_.resize(d.size());
-  item_.resize(d.size());
+  item_.resize(d.size() + 1, -1);  // + a sentinel read past the last row
 }
 
 namespace {
@@ -95,36 +96,45 @@ inline int Ceil(float v) {
   return i + (float(i) < v);
 }
 
-// One chain of a convex polygon's edges, walked down the rows. Each edge
-// is set up from its endpoints in a canonical order (upper one first), so
-// an edge shared by two neighbours gives them bit-identical crossings.
+// 16.16 fixed point for edge crossings: rows then step by one integer add,
+// and ceil is a shift. |v| is kept below 1e9 pixels.
+inline int64_t Fixed(float v) {
+  return int64_t(double(std::clamp(v, -1e9f, 1e9f)) * 65536.0);
+}
+
+// One chain of a convex polygon's edges, walked down the rows. Each edge is
+// set up from its own endpoints, upper one first, and stepped from its own
+// first row, so an edge shared by two neighbours gives both bit-identical
+// crossings on every row.
 struct Chain {
   const float (*pt)[2];
-  int n, at, step, end;  // current upper vertex, direction, bottom vertex
-  float y1 = 0, x0 = 0, y0 = 0, dxdy = 0;
+  int n, at, step, end;       // current upper vertex, direction, bottom vertex
+  int r1 = INT32_MIN;         // first row below the current edge
+  int64_t x = 0, dx = 0;      // crossing at the current row's centre; per row
 
-  void Next() {  // the next non-horizontal edge below
-    while (at != end) {
+  // Moves to the edge that crosses row `row`.
+  void Seek(int row) {
+    while (row >= r1 && at != end) {
       const float* p = pt[at];
       at += step;  // wrap without a division: this runs per edge
       if (at == n) at = 0;
       if (at < 0) at = n - 1;
       const float* q = pt[at];
-      if (q[1] == p[1]) continue;
       const float* u = p[1] < q[1] ? p : q;
       const float* l = p[1] < q[1] ? q : p;
-      y0 = u[1];
-      y1 = l[1];
-      x0 = u[0];
-      dxdy = (l[0] - u[0]) / (l[1] - u[1]);
-      return;
+      const int r0 = Ceil(u[1] - 0.5f);
+      r1 = Ceil(l[1] - 0.5f);
+      if (r0 >= r1 || row >= r1) continue;  // no row centre on this edge for us
+      const float dxdy = (l[0] - u[0]) / (l[1] - u[1]);
+      x = Fixed(u[0] + (float(r0) + 0.5f - u[1]) * dxdy);
+      dx = Fixed(dxdy);
+      x += int64_t(row - r0) * dx;  // rows above the face's top were clipped
     }
   }
-  float X(float yc) {
-    while (yc >= y1 && at != end) Next();
-    return x0 + (yc - y0) * dxdy;
-  }
 };
+
+// Pixel index of the first centre at or right of fixed-point x: ceil(x - 0.5).
+inline int64_t FirstPixel(int64_t x) { return (x - 32768 + 65535) >> 16; }
 
 }  // namespace
 
@@ -146,14 +156,13 @@ void Hemicube::Scan(int face, const float (*pt)[2], int n, float za, float zb,
   const int yb = std::min(H, Ceil(std::min(pt[bottom][1], lim) - 0.5f));
   if (ya >= yb) return;
   Chain a{pt, n, top, 1, bottom}, b{pt, n, top, -1, bottom};
-  a.Next();
-  b.Next();
-  for (int y = ya; y < yb; ++y) {
+  for (int y = ya; y < yb; ++y, a.x += a.dx, b.x += b.dx) {
+    a.Seek(y);
+    b.Seek(y);
+    const int64_t xl = std::min(a.x, b.x), xr = std::max(a.x, b.x);
+    const int xa = int(std::clamp<int64_t>(FirstPixel(xl), 0, R));
+    const int xb = int(std::clamp<int64_t>(FirstPixel(xr), 0, R));
     const float yc = y + 0.5f;
-    float xl = a.X(yc), xr = b.X(yc);
-    if (xl > xr) std::swap(xl, xr);
-    const int xa = std::max(0, Ceil(std::max(xl, -lim) - 0.5f));
-    const int xb = std::min(R, Ceil(std::min(xr, lim) - 0.5f));
     float* drow = depth + size_t(y) * R;
     int32_t* irow = item + size_t(y) * R;
     const float zrow = zb * yc + zc + 0.5f * za;
@@ -229,7 +238,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
 
   // Pass 2: every leaf element of those faces into the item buffers.
   std::fill(depth_.begin(), depth_.end(), 0.0f);
-  std::fill(item_.begin(), item_.end(), -1);
+  std::fill(item_.begin(), item_.end() - 1, -1);
   long elements = 0;
   std::vector<int>& leaves = leaves_;
   for (int f : front) {
@@ -307,17 +316,27 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
   }
   auto t2 = Clock::now();
 
-  // Pass 3: sum delta form factors per element, a run of equal ids at a time.
-  const size_t npix = item_.size();
+  // Pass 3: sum delta form factors per element, a run of equal ids at a
+  // time. Run ends are found as a bit mask per 64 pixels and visited by
+  // their set bits: no branch per pixel to mispredict at every boundary.
+  const size_t npix = size_t(3) * R * R;
   for (size_t row = 0, n = npix / R; row < n; ++row) {
-    const int32_t* it = &item_[row * R];
+    const int32_t* it = &item_[row * R];  // it[R] is readable: next row or sentinel
     const double* pre = &prefix_[row * (R + 1)];
     int x0 = 0;
-    for (int x = 1; x <= R; ++x)
-      if (x == R || it[x] != it[x0]) {
-        if (it[x0] >= 0) acc_[it[x0]] += pre[x] - pre[x0];
-        x0 = x;
+    for (int base = 0; base < R; base += 64) {
+      const int len = std::min(64, R - base);
+      uint64_t ends = 0;  // bit k: a run ends after pixel base + k
+      for (int k = 0; k < len; ++k)
+        ends |= uint64_t(it[base + k + 1] != it[base + k]) << k;
+      if (base + len == R) ends |= uint64_t(1) << (len - 1);
+      while (ends) {
+        const int x1 = base + __builtin_ctzll(ends) + 1;
+        ends &= ends - 1;
+        if (it[x0] >= 0) acc_[it[x0]] += pre[x1] - pre[x0];
+        x0 = x1;
       }
+    }
   }
   out->clear();
   for (size_t id = 0; id < mesh.elems.size(); ++id)
