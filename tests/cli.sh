@@ -1,0 +1,103 @@
+#!/bin/bash
+# The command line end to end: outputs and formats, --reference and the RMS
+# columns, bad options (exit 2, one line), an unwritable output directory
+# (exit 1), and SIGINT/SIGTERM (finish the shot, write everything, exit 0;
+# a second signal leaves at once).
+# shellcheck source=tests/lib.sh
+. "$(dirname "$0")/lib.sh"
+
+SCENES=$(cd "$(dirname "$0")/../scenes" && pwd)
+CB=$SCENES/cornell.obj
+
+# Outputs of a converged run.
+run_rad "$T/cb" -r 64 "$CB"
+[ "$RC" -eq 0 ] && pass "cornell -r 64 exit 0" || fail "cornell -r 64 (got exit $RC, want 0)"
+rows=$(($(wc -l <"$T/cb/result.csv") - 1))
+faces=$(grep -c '^f ' "$CB")
+[ "$rows" -eq "$faces" ] && pass "result.csv rows (got $rows, want $faces)" || fail "result.csv rows (got $rows, want $faces)"
+csv_sane "cornell" "$T/cb/result.csv" "$faces"
+head -c 8 "$T/cb/final.png" | od -An -c | grep -q 'P   N   G' && pass "final.png is a PNG" || fail "final.png is not a PNG"
+hdr=$(head -1 "$T/cb/log.csv")
+[ "$hdr" = "time_s,shots,wave,elements,unshot_fraction,rms,rel_rms" ] && pass "log.csv header" || fail "log.csv header (got $hdr)"
+last=$(tail -1 "$T/cb/log.csv" | cut -d, -f5)
+awk -v u="$last" 'BEGIN { exit !(u < 1e-3) }' && pass "last log row below epsilon (got $last)" || fail "last log row below epsilon (got $last, want < 1e-3)"
+grep -q '^element vertex [1-9]' "$T/cb/result.ply" && grep -q '^property uchar red' "$T/cb/result.ply" \
+  && pass "result.ply has coloured vertices" || fail "result.ply header"
+
+# PPM output and picture size.
+run_rad "$T/ppm" -r 32 -s 20 --format ppm --size 64x48 "$CB"
+[ "$(head -c 2 "$T/ppm/final.ppm")" = "P6" ] && [ "$(sed -n 2p "$T/ppm/final.ppm")" = "64 48" ] \
+  && pass "--format ppm --size 64x48" || fail "--format ppm --size 64x48 (header $(head -c 12 "$T/ppm/final.ppm" | tr '\n' ' '))"
+
+# --reference: log.csv carries rms; against itself at the end it is ~0.
+run_rad "$T/ref" -r 64 --reference "$T/cb/result.csv" --log-every 50 "$CB"
+first=$(sed -n 2p "$T/ref/log.csv" | cut -d, -f7)
+final=$(tail -1 "$T/ref/log.csv" | cut -d, -f7)
+awk -v a="$first" -v b="$final" 'BEGIN { exit !(a > 0.1 && b < 1e-6) }' \
+  && pass "rel_rms falls from $first to $final against its own converged result" \
+  || fail "rel_rms from $first to $final (want > 0.1 to < 1e-6)"
+
+# A reference of another scene is bad input.
+run_rad "$T/badref" -s 5 --reference "$T/cb/result.csv" "$SCENES/maze.obj"
+[ "$RC" -eq 2 ] && grep -q "^radiosity: .*result.csv:[0-9]*: " "$T/badref.err" \
+  && pass "reference of another scene: exit 2, file:line ($(head -1 "$T/badref.err"))" \
+  || fail "reference of another scene (exit $RC: $(head -1 "$T/badref.err"))"
+
+# Bad options: exit 2, exactly one line starting with "radiosity: ".
+bad_option() {
+  local err=$T/opt.err
+  timeout 20 "$RADIOSITY" "$@" >/dev/null 2>"$err"
+  local rc=$? lines
+  lines=$(wc -l <"$err")
+  if [ "$rc" -eq 2 ] && [ "$lines" -eq 1 ] && grep -q '^radiosity: ' "$err"; then
+    pass "bad option $*: $(cat "$err")"
+  else
+    fail "bad option $* (exit $rc, $lines lines: $(head -c 200 "$err"))"
+  fi
+}
+bad_option -r 9 "$CB"
+bad_option -r 100000 "$CB"
+bad_option -r abc "$CB"
+bad_option -e -1 "$CB"
+bad_option -s 0 "$CB"
+bad_option --size 0x10 "$CB"
+bad_option --size 1000000x1000000 "$CB"
+bad_option --format gif "$CB"
+bad_option --camera "1 2 3" "$CB"
+bad_option --patch-size 0 "$CB"
+bad_option --no-such-option "$CB"
+bad_option "$CB" -r
+timeout 20 "$RADIOSITY" >/dev/null 2>"$T/none.err"; rc=$?
+[ "$rc" -eq 2 ] && grep -q usage "$T/none.err" && pass "no scene: usage, exit 2" || fail "no scene (exit $rc)"
+"$RADIOSITY" --help | grep -q -- '--reference' && pass "--help lists options" || fail "--help"
+"$RADIOSITY" --version | grep -q '^radiosity [0-9]' && pass "--version" || fail "--version"
+
+# An output directory that cannot be made is a run-time failure.
+: >"$T/file"
+timeout 60 "$RADIOSITY" -q -o "$T/file/sub" -s 5 "$CB" 2>"$T/unw.err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "^radiosity: .*file.*: Not a directory" "$T/unw.err" \
+  && pass "unwritable -o: exit 1 ($(head -1 "$T/unw.err"))" || fail "unwritable -o (exit $rc: $(head -1 "$T/unw.err"))"
+
+# SIGINT / SIGTERM: finish the shot in hand, write everything, exit 0.
+for sig in INT TERM; do
+  out=$T/sig$sig
+  "$RADIOSITY" -o "$out" -e 1e-12 "$SCENES/room.obj" 2>"$out.err" &
+  pid=$!
+  sleep 2
+  kill -s "$sig" "$pid"
+  wait "$pid"; rc=$?
+  if [ "$rc" -eq 0 ] && grep -q "stopped on request" "$out.err" && [ -s "$out/result.csv" ] && [ -s "$out/final.png" ]; then
+    pass "SIG$sig: exit 0, results written ($(tail -1 "$out.err"))"
+  else
+    fail "SIG$sig (exit $rc, $(tail -1 "$out.err"))"
+  fi
+done
+# A second signal leaves at once.
+"$RADIOSITY" -q -o "$T/twice" -e 1e-12 "$SCENES/room.obj" 2>/dev/null &
+pid=$!
+sleep 1
+kill -INT "$pid"; kill -INT "$pid"
+wait "$pid"; rc=$?
+[ "$rc" -ne 0 ] && pass "second SIGINT ends at once (exit $rc)" || fail "second SIGINT (exit $rc, want non-zero)"
+
+finish
