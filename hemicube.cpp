@@ -30,14 +30,14 @@ inline void ToFace(int f, const float* p, float* q) {
   }
 }
 
-inline uint32_t Outcode(int f, const float* q, float near) {
-  uint32_t c = 0;
-  if (q[0] > q[2]) c |= kAHi;
-  if (q[0] < -q[2]) c |= kALo;
-  if (q[1] > q[2]) c |= kBHi;
-  if (q[1] < (f == 0 ? -q[2] : 0.0f)) c |= kBLo;
-  if (q[2] < near) c |= kNear;
-  return c;
+// All five faces' outcodes of a shooter-local point, branch-free.
+inline uint32_t Outcodes(float x, float y, float z, float near) {
+  auto code = [near](float a, float b, float d, float blo) {
+    return uint32_t(a > d) * kAHi | uint32_t(a < -d) * kALo | uint32_t(b > d) * kBHi |
+           uint32_t(b < blo) * kBLo | uint32_t(d < near) * kNear;
+  };
+  return code(x, y, z, -z) | code(y, z, x, 0) << 5 | code(y, z, -x, 0) << 10 |
+         code(x, z, y, 0) << 15 | code(x, z, -y, 0) << 20;
 }
 
 // ∫∫ over a pixel of the delta form factor, 3x3 Gauss-Legendre.
@@ -215,13 +215,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       p[0] = float(glm::dot(d, u));
       p[1] = float(glm::dot(d, v));
       p[2] = float(glm::dot(d, n));
-      uint32_t code = 0;
-      float q[3];
-      for (int h = 0; h < 5; ++h) {
-        ToFace(h, p, q);
-        code |= Outcode(h, q, near) << (5 * h);
-      }
-      code_[i] = code;
+      code_[i] = Outcodes(p[0], p[1], p[2], near);
       // Pixel coordinates on all five faces from three reciprocals (the
       // faces look along z, ±x, ±y). Used only where the vertex is past
       // the near plane, so a division by 0 elsewhere is harmless.
