@@ -37,6 +37,14 @@ awk -v a="$first" -v b="$final" 'BEGIN { exit !(a > 0.1 && b < 1e-6) }' \
   && pass "rel_rms falls from $first to $final against its own converged result" \
   || fail "rel_rms from $first to $final (want > 0.1 to < 1e-6)"
 
+# The same run twice gives the same numbers (hemicube turns are seeded).
+run_rad "$T/again" -r 64 "$CB"
+cmp -s "$T/cb/result.csv" "$T/again/result.csv" && pass "a second run gives an identical result.csv" \
+  || fail "a second run differs: $(diff "$T/cb/result.csv" "$T/again/result.csv" | head -3 | tr '\n' ' ')"
+run_rad "$T/seed" -r 64 --seed 7 "$CB"
+cmp -s "$T/cb/result.csv" "$T/seed/result.csv" && fail "--seed 7 gives the same hemicube turns as seed 1" \
+  || pass "--seed changes the hemicube turns"
+
 # A reference of another scene is bad input.
 run_rad "$T/badref" -s 5 --reference "$T/cb/result.csv" "$SCENES/maze.obj"
 [ "$RC" -eq 2 ] && grep -q "^radiosity: .*result.csv:[0-9]*: " "$T/badref.err" \

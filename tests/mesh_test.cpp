@@ -1,0 +1,117 @@
+#include "mesh.h"
+
+#include <cmath>
+#include <map>
+
+#include <gtest/gtest.h>
+
+#include "test_util.h"
+
+namespace {
+
+double LeafArea(const Mesh& m, int face) {
+  double a = 0;
+  std::vector<int> leaves;
+  for (int p : m.faces[face].patches) {
+    m.Leaves(p, &leaves);
+    for (int e : leaves) a += m.elems[e].area;
+  }
+  return a;
+}
+
+double MaxEdge(const Mesh& m, int patch) {
+  // Extent of a patch: the largest distance between two of its corners.
+  std::vector<glm::dvec3> pts;
+  for (int e : m.patches[patch].elements)
+    for (int k = 0; k < (m.elems[e].IsTriangle() ? 3 : 4); ++k) pts.push_back(m.verts[m.elems[e].v[k]]);
+  double d = 0;
+  for (const auto& a : pts)
+    for (const auto& b : pts) d = std::max(d, glm::length(a - b));
+  return d;
+}
+
+TEST(Mesh, DefaultRuleCutsToADiagonalSixteenth) {
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  EXPECT_NEAR(m.scene_diagonal, std::sqrt(3.0), 1e-12);
+  EXPECT_NEAR(m.patch_size, std::sqrt(3.0) / 16, 1e-12);
+  // 1 / (sqrt(3)/16) = 9.24 -> 10 x 10 patches a face, 2 x 2 elements each.
+  EXPECT_EQ(m.patches.size(), 6u * 100);
+  EXPECT_EQ(m.elems.size(), 6u * 400);
+  for (size_t p = 0; p < m.patches.size(); ++p) {
+    EXPECT_LE(MaxEdge(m, int(p)), m.patch_size * std::sqrt(2.0) + 1e-12);
+    EXPECT_EQ(m.patches[p].elements.size(), 4u);
+  }
+}
+
+TEST(Mesh, ElementsTileEveryFaceExactly) {
+  Scene s = EmptyScene();
+  AddFace(&s, {{0, 0, 0}, {3, 0, 0}, {0, 2, 0}}, glm::dvec3(0.5), glm::dvec3(0));  // triangle
+  AddFace(&s, {{0, 0, 1}, {2, 0, 1}, {2.5, 1, 1}, {0.2, 1.4, 1}}, glm::dvec3(0.5),
+          glm::dvec3(0));  // convex quad, not a parallelogram
+  AddFace(&s, {{0, 0, 2}, {2, 0, 2}, {2, 2, 2}, {1, 1, 2}, {0, 2, 2}}, glm::dvec3(0.5),
+          glm::dvec3(0));  // concave pentagon
+  AddFace(&s, {{0, 0, 3}, {2, 0, 3}, {3, 1, 3}, {2, 2, 3}, {0, 2, 3}, {-1, 1, 3}},
+          glm::dvec3(0.5), glm::dvec3(0));  // hexagon
+  MeshOptions o;
+  o.patch_size = 0.3;
+  o.elements_per_patch = 3;
+  Mesh m = MakeMesh(s, o);
+  for (size_t f = 0; f < s.faces.size(); ++f) {
+    EXPECT_NEAR(LeafArea(m, int(f)), s.faces[f].area, 1e-9 * s.faces[f].area) << "face " << f;
+    double pa = 0;
+    for (int p : m.faces[f].patches) pa += m.patches[p].area;
+    EXPECT_NEAR(pa, s.faces[f].area, 1e-9 * s.faces[f].area);
+  }
+  // Every element faces the way its face does.
+  for (size_t e = 0; e < m.elems.size(); ++e) {
+    const Element& el = m.elems[e];
+    std::vector<glm::dvec3> poly;
+    for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) poly.push_back(m.verts[el.v[k]]);
+    EXPECT_GT(glm::dot(AreaVector(poly), m.FaceOf(int(e)).normal), 0) << "element " << e;
+  }
+}
+
+// Two faces cut alike along a common edge get bit-identical points there,
+// whichever way each walks the edge: the hemicube then sees no crack.
+TEST(Mesh, CommonEdgePointsAreBitIdentical) {
+  Scene s = EmptyScene();
+  AddFace(&s, {{0, 0, 0}, {0.7, 0, 0.1}, {0.7, 0.9, 0.1}, {0, 0.9, 0}}, glm::dvec3(0.5),
+          glm::dvec3(0));
+  // Listed from the edge's other end, so its grid walks the edge backwards.
+  AddFace(&s, {{0.7, 0.9, 0.1}, {0.7, 0, 0.1}, {1.3, 0.1, 0.9}, {1.3, 1.0, 0.9}},
+          glm::dvec3(0.5), glm::dvec3(0));
+  MeshOptions o;
+  o.patch_size = 0.1;
+  Mesh m = MakeMesh(s, o);
+  auto on_edge = [](const glm::dvec3& p) {
+    return std::abs(p.x - 0.7) < 1e-9 && std::abs(p.z - 0.1) < 1e-9;
+  };
+  std::map<double, int> count;  // y -> faces with a vertex there
+  for (const MeshFace& f : m.faces)
+    for (int v = f.vbegin; v < f.vend; ++v)
+      if (on_edge(m.verts[v]) && m.verts[v].x == 0.7 && m.verts[v].z == 0.1) ++count[m.verts[v].y];
+  ASSERT_GT(count.size(), 5u);
+  for (const auto& [y, n] : count) EXPECT_EQ(n, 2) << "y " << y;
+}
+
+TEST(Mesh, PatchCentresLieOnTheirFace) {
+  Scene s = Box(2.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  for (const Patch& p : m.patches) {
+    const MeshFace& f = m.faces[p.face];
+    EXPECT_NEAR(glm::dot(f.normal, p.center), f.offset, 1e-12);
+  }
+}
+
+TEST(Mesh, RefusesAbsurdElementCounts) {
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  MeshOptions o;
+  o.patch_size = 1e-5;
+  Mesh m;
+  std::string err;
+  EXPECT_FALSE(BuildMesh(s, o, &m, &err));
+  EXPECT_NE(err.find("elements"), std::string::npos) << err;
+}
+
+}  // namespace
