@@ -5,15 +5,16 @@
 #  converge - shots and seconds to 1% relative RMS error against the scene's
 #             converged solution (epsilon 1e-6), with and without
 #             overshooting; master time (select + shoot) per shot
-# Rows also go to bench/results/engine.csv. Timings are from this machine,
+# Rows also go to bench/results/columns.csv and converge.csv. Timings are from this machine,
 # one run each; compare ratios, not absolute times across machines.
 cd "$(dirname "$0")/.." || exit 1
 mkdir -p bench/results
-out=bench/results/engine.csv
+out_columns=bench/results/columns.csv
+out_converge=bench/results/converge.csv
 rows=$(mktemp)
 trap 'rm -f "$rows"' EXIT
 for scene in cornell room maze; do
-  ./build/radiosity-bench "scenes/$scene.obj" 128 256 | tee -a "$rows" >/dev/null || exit 1
+  ./build/radiosity-bench "scenes/$scene.obj" 128 256 >>"$rows" || exit 1
 done
 echo "Form-factor column (ms per column, means over up to 400 patches)"
 echo "| scene | R | elements | covered | column | transform | raster | readback | model | ratio |"
@@ -25,8 +26,12 @@ echo "| scene | R | method | shots | seconds | master us/shot | reference shots 
 echo "|---|---|---|---|---|---|---|---|"
 grep '^converge' "$rows" | sed 's/^converge | /| /; s/$/ |/'
 {
-  echo "table,scene,R,a,b,c,d,e,f,g,h"
-  sed 's/ | /,/g' "$rows"
-} >"$out"
+  echo "scene,R,elements,covered,column_ms,transform_ms,raster_ms,readback_ms,model_ms,ratio"
+  grep '^column' "$rows" | sed 's/^column | //; s/ | /,/g'
+} >"$out_columns"
+{
+  echo "scene,R,method,shots,seconds,master_us_per_shot,reference_shots,reference_s"
+  grep '^converge' "$rows" | sed 's/^converge | //; s/ | /,/g'
+} >"$out_converge"
 echo
-echo "CSV: $out"
+echo "CSV: $out_columns $out_converge"
