@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <unordered_map>
 
 #include "check.h"
@@ -32,28 +31,14 @@ class FaceVerts {
  public:
   explicit FaceVerts(std::vector<glm::dvec3>* verts) : verts_(verts) {}
   int Id(const glm::dvec3& p) {
-    Key k;
-    std::memcpy(k.bits, &p, sizeof k.bits);
-    auto it = ids_.find(k);
-    if (it != ids_.end()) return it->second;
-    int id = int(verts_->size());
-    verts_->push_back(p);
-    ids_.emplace(k, id);
-    return id;
+    auto [it, added] = ids_.try_emplace(p, int(verts_->size()));
+    if (added) verts_->push_back(p);
+    return it->second;
   }
 
  private:
-  struct Key {
-    uint64_t bits[3];
-    bool operator==(const Key& o) const { return std::memcmp(bits, o.bits, sizeof bits) == 0; }
-  };
-  struct Hash {
-    size_t operator()(const Key& k) const {
-      return k.bits[0] * 0x9E3779B97F4A7C15ull ^ k.bits[1] * 0xC2B2AE3D27D4EB4Full ^ k.bits[2];
-    }
-  };
   std::vector<glm::dvec3>* verts_;
-  std::unordered_map<Key, int, Hash> ids_;
+  std::unordered_map<glm::dvec3, int, PointHash> ids_;
 };
 
 double PolyArea(const Mesh& m, const Element& e) {

@@ -15,6 +15,7 @@
 #define RADIOSITY_MESH_H
 
 #include <array>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,15 @@ struct MeshFace {
   double offset = 0.0;           // plane: dot(normal, x) == offset
   int vbegin = 0, vend = 0;      // its vertices: Mesh::verts[vbegin, vend)
   std::vector<int> patches;
+};
+
+// Hash of a point by value (glm's == compares by value), for joining
+// equal points: a face's shared grid points, coplanar faces' shading.
+struct PointHash {
+  size_t operator()(const glm::dvec3& p) const {
+    std::hash<double> h;
+    return h(p.x) * 0x9E3779B97F4A7C15ull ^ h(p.y) * 0xC2B2AE3D27D4EB4Full ^ h(p.z);
+  }
 };
 
 struct MeshOptions {

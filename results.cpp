@@ -203,9 +203,7 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   };
   struct Hash {
     size_t operator()(const Key& k) const {
-      std::hash<double> h;
-      return h(k.p.x) * 31 + h(k.p.y) * 17 + h(k.p.z) + size_t(k.n[0] ^ k.n[1] ^ k.n[2]) +
-             size_t(k.material) * 101;
+      return PointHash()(k.p) ^ size_t(k.n[0] ^ k.n[1] ^ k.n[2]) ^ size_t(k.material) * 101;
     }
   };
   std::unordered_map<Key, int, Hash> group_of;

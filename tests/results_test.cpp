@@ -64,23 +64,22 @@ TEST(Results, ReferenceOfAnotherSceneIsRefusedWithItsLine) {
   Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
   std::string err;
   std::vector<glm::dvec3> ref;
-  auto write = [](const std::string& p, const std::string& text) { std::ofstream(p) << text; };
   const std::string p = TempPath("bad.csv");
-  write(p, "face,object,area,B_r,B_g,B_b\n0,default,1,1,1,1\n");
-  EXPECT_FALSE(ReadReference(p, s, &ref, &err));
-  EXPECT_NE(err.find(":3: has 1 rows, the scene 6 faces"), std::string::npos) << err;
-  write(p, "face,object,area,B_r,B_g,B_b\n0,default,2,1,1,1\n");
-  EXPECT_FALSE(ReadReference(p, s, &ref, &err));
-  EXPECT_NE(err.find(":2: face area differs"), std::string::npos) << err;
-  write(p, "face,object,area,B_r,B_g,B_b\n0,default,1,1,nan,1\n");
-  EXPECT_FALSE(ReadReference(p, s, &ref, &err));
-  EXPECT_NE(err.find(":2: bad number 'nan'"), std::string::npos) << err;
-  write(p, "time_s,shots\n");
-  EXPECT_FALSE(ReadReference(p, s, &ref, &err));
-  EXPECT_NE(err.find(":1: not a result.csv header"), std::string::npos) << err;
-  write(p, "face,object,area,B_r,B_g,B_b\n0,\"open,1,1,1,1\n");
-  EXPECT_FALSE(ReadReference(p, s, &ref, &err));
-  EXPECT_NE(err.find(":2: unterminated quote"), std::string::npos) << err;
+  const std::string header = "face,object,area,B_r,B_g,B_b\n";
+  const struct {
+    std::string text, error;
+  } cases[] = {
+      {header + "0,default,1,1,1,1\n", ":3: has 1 rows, the scene 6 faces"},
+      {header + "0,default,2,1,1,1\n", ":2: face area differs"},
+      {header + "0,default,1,1,nan,1\n", ":2: bad number 'nan'"},
+      {"time_s,shots\n", ":1: not a result.csv header"},
+      {header + "0,\"open,1,1,1,1\n", ":2: unterminated quote"},
+  };
+  for (const auto& c : cases) {
+    std::ofstream(p) << c.text;
+    EXPECT_FALSE(ReadReference(p, s, &ref, &err)) << c.text;
+    EXPECT_NE(err.find(c.error), std::string::npos) << err;
+  }
   EXPECT_FALSE(ReadReference(TempPath("missing.csv"), s, &ref, &err));
   EXPECT_NE(err.find("cannot open"), std::string::npos) << err;
 }
