@@ -101,10 +101,12 @@ for sig in INT TERM; do
   fi
 done
 # A second signal leaves at once.
-"$RADIOSITY" -q -o "$T/twice" -e 1e-12 "$SCENES/room.obj" 2>/dev/null &
+# Two signals sent back to back can merge into one pending signal, so the
+# second comes 0.5 s later, while a large picture (seconds of work) is written.
+"$RADIOSITY" -q -o "$T/twice" -e 1e-12 --size 6000x6000 "$SCENES/room.obj" 2>/dev/null &
 pid=$!
 sleep 1
-kill -INT "$pid"; kill -INT "$pid"
+kill -INT "$pid"; sleep 0.5; kill -INT "$pid"
 wait "$pid"; rc=$?
 [ "$rc" -ne 0 ] && pass "second SIGINT ends at once (exit $rc)" || fail "second SIGINT (exit $rc, want non-zero)"
 
