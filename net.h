@@ -1,0 +1,127 @@
+// The wire protocol between master and workers: framing and message
+// codecs. doc/protocol.txt describes every byte; this file is its code.
+//
+// A frame is an 8-byte header (u32 length of the payload, u8 type, three
+// zero bytes) followed by the payload; all integers little-endian. A frame
+// longer than kMaxFrame, of an unknown type or with a payload that does not
+// decode exactly (too short, bytes left over, out-of-range values) is an
+// error of that connection: the decoders return false with a message and
+// the caller closes the connection, never the program.
+#ifndef RADIOSITY_NET_H
+#define RADIOSITY_NET_H
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "hemicube.h"
+#include "mesh.h"
+#include "scene.h"
+
+namespace proto {
+
+constexpr uint32_t kMagic = 0x57444152;  // "RADW" on the wire
+constexpr uint16_t kVersion = 1;
+constexpr size_t kHeaderSize = 8;
+constexpr uint32_t kMaxFrame = 256u << 20;  // the scene frame is the largest
+
+enum class Msg : uint8_t {
+  kHello = 1,      // both ways, first frame
+  kScene = 2,      // master -> worker, once
+  kReady = 3,      // worker -> master: mesh built
+  kWork = 4,       // master -> worker: patches to compute
+  kColumn = 5,     // worker -> master: one form-factor column
+  kDivide = 6,     // master -> worker: hierarchy edits
+  kHeartbeat = 7,  // both ways, when nothing else was sent for a while
+  kError = 8,      // both ways: a one-line reason, then the sender closes
+  kBye = 9,        // master -> worker: exit now
+};
+const char* MsgName(Msg m);
+
+struct Hello {
+  uint32_t magic = kMagic;
+  uint16_t version = kVersion;
+  std::string build;  // BuildId() of the sender: both ends must agree
+};
+
+// What a worker needs to build the master's mesh bit for bit and to
+// compute columns like the master would.
+struct SceneSetup {
+  Scene scene;          // faces (verts, normal, area, material, index),
+                        // materials (kd, ke), lo, hi; names are not sent
+  MeshOptions mesh;
+  int32_t resolution = 256;
+  uint8_t rotate = 1;
+  uint32_t seed = 1;
+};
+
+struct Ready {
+  uint64_t elements = 0;  // elements in the worker's mesh
+  uint64_t mesh_hash = 0; // MeshHash() of it: must equal the master's
+};
+
+struct Assignment {
+  int32_t patch;
+  int32_t k;  // this is the patch's k-th shot: the hemicube angle
+};
+
+struct Column {
+  int32_t patch = 0;
+  int32_t k = 0;
+  double compute_s = 0;  // worker CPU seconds for this column
+  std::vector<FormFactor> ff;  // increasing elem, f > 0
+};
+
+// Appends a whole frame (header and payload) to *out.
+void EncodeHello(const Hello& m, std::string* out);
+void EncodeScene(const SceneSetup& m, std::string* out);
+void EncodeReady(const Ready& m, std::string* out);
+void EncodeWork(const std::vector<Assignment>& m, std::string* out);
+// Element ids are delta-coded varints; form factors are floats rounded to
+// 24 bits (sign dropped: f > 0), relative error <= 2^-17 (kFormFactorError).
+void EncodeColumn(const Column& m, std::string* out);
+void EncodeDivide(const std::vector<int32_t>& elems, std::string* out);
+void EncodeHeartbeat(std::string* out);
+void EncodeError(const std::string& text, std::string* out);
+void EncodeBye(std::string* out);
+
+constexpr double kFormFactorError = 1.0 / (1 << 17);
+
+// Payload decoders: the payload of one frame of the matching type. False
+// with *err (one line, no prefix) when it does not decode exactly.
+bool DecodeHello(const std::string& payload, Hello* m, std::string* err);
+bool DecodeScene(const std::string& payload, SceneSetup* m, std::string* err);
+bool DecodeReady(const std::string& payload, Ready* m, std::string* err);
+bool DecodeWork(const std::string& payload, std::vector<Assignment>* m, std::string* err);
+bool DecodeColumn(const std::string& payload, Column* m, std::string* err);
+bool DecodeDivide(const std::string& payload, std::vector<int32_t>* m, std::string* err);
+bool DecodeError(const std::string& payload, std::string* text, std::string* err);
+
+// Splits a byte stream into frames. Feed it what read() returned; Next()
+// hands out whole frames in order.
+class FrameReader {
+ public:
+  void Append(const char* data, size_t n);
+  enum Result { kFrame, kNeedMore, kBad };
+  // kFrame: *type and *payload set. kBad: *err says why; the stream is
+  // then unusable (no resynchronisation: the connection must be closed).
+  Result Next(Msg* type, std::string* payload, std::string* err);
+  size_t buffered() const { return buf_.size() - pos_; }
+
+ private:
+  std::string buf_;
+  size_t pos_ = 0;
+  bool bad_ = false;
+};
+
+// This build's identity, sent in Hello: version, protocol and the
+// compiler, so that master and workers build identical meshes.
+std::string BuildId();
+
+// A hash of the mesh geometry and hierarchy (vertex bits, element
+// vertices, parents), to check that a worker built what the master has.
+uint64_t MeshHash(const Mesh& mesh);
+
+}  // namespace proto
+
+#endif
