@@ -3,16 +3,26 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <deque>
+#include <memory>
 
 #include "check.h"
+#include "transport.h"
 
 Solver::Solver(const Mesh& mesh, bool overshoot)
     : mesh_(mesh),
       overshoot_(overshoot),
       b_(mesh.elems.size()),
+      rho_per_area_(mesh.elems.size()),
+      patch_of_(mesh.elems.size()),
       unshot_(mesh.patches.size()),
+      fsum_(mesh.patches.size(), 0.0),
       times_shot_(mesh.patches.size(), 0) {
-  for (size_t e = 0; e < mesh.elems.size(); ++e) b_[e] = mesh.FaceOf(int(e)).emission;
+  for (size_t e = 0; e < mesh.elems.size(); ++e) {
+    b_[e] = mesh.FaceOf(int(e)).emission;
+    rho_per_area_[e] = mesh.FaceOf(int(e)).rho / mesh.elems[e].area;
+    patch_of_[e] = mesh.elems[e].patch;
+  }
   glm::dvec3 rho_area(0.0);
   for (size_t p = 0; p < mesh.patches.size(); ++p) {
     const MeshFace& f = mesh.faces[mesh.patches[p].face];
@@ -69,15 +79,26 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   const glm::dvec3 x = ToShoot(p);
   unshot_[p] -= x;
   unshot_sum_ -= x * shooter.area;
+  // Power arriving at element e and reflected: ρ_e · x · F · A_shooter.
+  // Per element only B changes, by that over A_e; a patch's unshot
+  // radiosity gains the same summed over its elements, and since they
+  // share one ρ it is enough to sum F per patch here (the master's
+  // per-shot cost bounds the speedup, paper graph 2).
+  const glm::dvec3 xa = x * shooter.area;
   for (const FormFactor& ff : column) {
-    const Element& e = mesh_.elems[ff.elem];
-    const Patch& q = mesh_.patches[e.patch];
-    // Power arriving at e and reflected: ρ_e · x · F · A_shooter.
-    const glm::dvec3 reflected = mesh_.faces[q.face].rho * x * (double(ff.f) * shooter.area);
-    b_[ff.elem] += reflected / e.area;
-    unshot_[e.patch] += reflected / q.area;
-    unshot_sum_ += reflected;
+    const int32_t e = ff.elem;
+    b_[e] += xa * (double(ff.f) * rho_per_area_[e]);
+    const int32_t q = patch_of_[e];
+    if (fsum_[q] == 0) touched_.push_back(q);
+    fsum_[q] += double(ff.f);
   }
+  for (int32_t q : touched_) {
+    const glm::dvec3 reflected = mesh_.faces[mesh_.patches[q].face].rho * xa * fsum_[q];
+    unshot_[q] += reflected / mesh_.patches[q].area;
+    unshot_sum_ += reflected;
+    fsum_[q] = 0;
+  }
+  touched_.clear();
   ++times_shot_[p];
   // The running sum drifts by rounding; a full sum every sweep bounds it.
   if (++shots_ % long(unshot_.size()) == 0) Resum();
@@ -111,77 +132,294 @@ double ShotAngle(unsigned seed, int patch, int k) {
   return double(z >> 11) * 0x1.0p-53 * 2 * M_PI;
 }
 
+namespace {
+
+// A worker as the scheduler keeps it (paper §4.1): the patches sent and
+// not yet answered, and the queue prepared for it. A patch in either is
+// owned by this worker and no other.
+struct Slot {
+  bool alive = false;
+  struct Sent {
+    proto::Assignment a;
+    double at;
+  };
+  std::deque<Sent> sent;
+  std::deque<int> prepared;
+  int depth = 2;          // sent and unanswered, at most
+  int high = 3, low = 2;  // watermarks on owned = sent + prepared
+  long columns = 0;
+  size_t Owned() const { return sent.size() + prepared.size(); }
+};
+
+class Scheduler {
+ public:
+  Scheduler(const Mesh& mesh, const RunOptions& opts, Solver* solver, Transport* t,
+            const std::function<void(const Sample&)>& sample,
+            const std::function<void(const std::string&, bool)>& note)
+      : mesh_(mesh), opts_(opts), solver_(solver), t_(t), sample_(sample), note_(note),
+        taken_(mesh.patches.size(), 0) {}
+  RunResult Run();
+
+ private:
+  double Elapsed() { return before_ + t_->Now() - base_; }
+  void Note(const std::string& line, bool warning) {
+    if (note_) note_(line, warning);
+  }
+  void Sizes(Slot* s, int workers) const;
+  void Handle(WorkerEvent& ev);
+  void Distribute();
+  void Release(Slot* s);
+  bool Stop(double unshot);
+  void Emit(double unshot) {
+    if (sample_) sample_({Elapsed(), solver_->shots(), 1, long(mesh_.elems.size()), unshot});
+  }
+
+  const Mesh& mesh_;
+  const RunOptions& opts_;
+  Solver* solver_;
+  Transport* t_;
+  std::unique_ptr<InProcessTransport> fallback_;
+  const std::function<void(const Sample&)>& sample_;
+  const std::function<void(const std::string&, bool)>& note_;
+  std::vector<char> taken_;           // owned by a worker, or its column waits
+  std::vector<Slot> slots_;
+  std::deque<proto::Column> ready_;   // columns received, to be shot in order
+  double base_ = 0, before_ = 0;      // clock: Elapsed() survives a fallback
+  double best_ = HUGE_VAL;            // stall detection
+  long best_at_ = 0;
+  RunResult r_;
+};
+
+// Queue sizes (paper §4.1: "3-10 patches according to network size").
+// depth covers the measured round trip: while one column travels back and
+// the next assignment travels out, the worker computes the ones it holds.
+// high adds enough prepared patches to refill that pipeline twice, more
+// with many workers (the master then takes longer to come round to each).
+void Scheduler::Sizes(Slot* s, int workers) const {
+  if (t_->InProcess()) {  // select right before computing: sequential order
+    s->depth = s->high = s->low = 1;
+    return;
+  }
+  if (opts_.queue > 0) {
+    s->high = opts_.queue;
+    s->depth = std::min(s->depth, s->high);
+  } else {
+    s->high = std::clamp(2 * s->depth + workers / 32, 3, 10);
+  }
+  s->low = std::max(1, (s->high + 1) / 2);
+}
+
+void Scheduler::Release(Slot* s) {
+  for (const Slot::Sent& x : s->sent) taken_[x.a.patch] = 0;
+  for (int p : s->prepared) taken_[p] = 0;
+  s->sent.clear();
+  s->prepared.clear();
+}
+
+void Scheduler::Handle(WorkerEvent& ev) {
+  if (ev.worker >= int(slots_.size())) slots_.resize(ev.worker + 1);
+  Slot& s = slots_[ev.worker];
+  switch (ev.kind) {
+    case WorkerEvent::kJoined:
+      s.alive = true;
+      ++r_.joined;
+      Sizes(&s, t_->Workers());
+      if (!t_->InProcess()) Note(t_->Name(ev.worker) + ": joined", false);
+      return;
+    case WorkerEvent::kLost: {
+      if (!s.alive) {  // never joined: nothing of it to give back
+        Note(t_->Name(ev.worker) + ": " + ev.why, true);
+        return;
+      }
+      s.alive = false;
+      ++r_.lost;
+      const size_t n = s.Owned();
+      Release(&s);
+      Note(t_->Name(ev.worker) + ": lost (" + ev.why + "); its " + std::to_string(n) +
+           " patches go to the others", true);
+      return;
+    }
+    case WorkerEvent::kColumn: {
+      const proto::Column& c = ev.column;
+      auto it = std::find_if(s.sent.begin(), s.sent.end(), [&](const Slot::Sent& x) {
+        return x.a.patch == c.patch && x.a.k == c.k;
+      });
+      // Only an outstanding assignment is shot: never the same patch twice.
+      if (!s.alive || it == s.sent.end()) {
+        ++r_.stale;
+        return;
+      }
+      const double net = t_->Now() - it->at - c.compute_s - c.wait_s;
+      if (!t_->InProcess() && c.compute_s > 0 && s.columns > 0) {
+        const int need = 1 + int(std::ceil(std::max(0.0, net) / c.compute_s));
+        s.depth = std::clamp(need, 2, 10);
+        Sizes(&s, t_->Workers());
+      }
+      ++s.columns;
+      s.sent.erase(it);
+      r_.worker_s += c.compute_s;
+      ready_.push_back(std::move(ev.column));
+      return;
+    }
+  }
+}
+
+// Cyclic fill (paper §4.1): when any queue is under its low mark, go round
+// the workers not yet at their high mark, one patch each per turn, always
+// the patch with the most power to shoot, so that the first lights of a
+// run go to different workers. Then send what each pipeline has room for.
+void Scheduler::Distribute() {
+  bool low = false;
+  for (const Slot& s : slots_) low |= s.alive && s.Owned() < size_t(s.low);
+  if (low) {
+    bool more = true;
+    while (more) {
+      more = false;
+      for (Slot& s : slots_) {
+        if (!s.alive || s.Owned() >= size_t(s.high)) continue;
+        const int p = solver_->Select(&taken_);
+        if (p < 0) return;
+        taken_[p] = 1;
+        s.prepared.push_back(p);
+        more = true;
+      }
+    }
+  }
+  for (size_t w = 0; w < slots_.size(); ++w) {
+    Slot& s = slots_[w];
+    while (s.alive && !s.prepared.empty() && s.sent.size() < size_t(s.depth)) {
+      const int p = s.prepared.front();
+      s.prepared.pop_front();
+      const proto::Assignment a{p, solver_->TimesShot(p)};
+      s.sent.push_back({a, t_->Now()});
+      t_->Assign(int(w), a);
+    }
+  }
+}
+
+bool Scheduler::Stop(double unshot) {
+  const long shots = solver_->shots();
+  if (solver_->Dark()) {
+    r_.status = RunStatus::kConverged;
+    r_.why = "the scene emits no light";
+  } else if (unshot < opts_.epsilon) {
+    r_.status = RunStatus::kConverged;
+  } else if (opts_.stop && *opts_.stop) {
+    r_.status = RunStatus::kStopped;
+  } else if (opts_.max_shots > 0 && shots >= opts_.max_shots) {
+    r_.status = RunStatus::kLimit;
+    r_.why = "shot limit reached";
+  } else if (opts_.max_seconds > 0 && Elapsed() >= opts_.max_seconds) {
+    r_.status = RunStatus::kLimit;
+    r_.why = "time limit reached";
+  } else if (!std::isfinite(unshot) || unshot > 1e12) {
+    r_.status = RunStatus::kNotConverged;
+    r_.why = "unshot energy grows without bound (does the scene reflect all light?)";
+  } else {
+    // Not converging: the unshot fraction has not fallen by 1% for this
+    // many shots (20 sweeps over the patches). Progress that slow (ρ → 1
+    // without overshooting) or none at all (ρ = 1) would not finish in
+    // useful time.
+    const long stall = std::max(1000L, 20 * long(mesh_.patches.size()));
+    if (unshot < best_ * 0.99) {
+      best_ = unshot;
+      best_at_ = shots;
+      return false;
+    }
+    if (shots - best_at_ <= stall) return false;
+    r_.status = RunStatus::kNotConverged;
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "unshot energy still %.3g of emitted and not falling for %ld shots "
+                  "(reflectance too close to 1?)",
+                  unshot, stall);
+    r_.why = buf;
+  }
+  return true;
+}
+
+RunResult Scheduler::Run() {
+  // The master's parts are timed in CPU seconds of this thread, so that
+  // the figures do not depend on what else runs on the machine; the time
+  // spent blocked waiting for workers is the rest of the wall time.
+  auto since = [](double t0) { return ThreadCpuSeconds() - t0; };
+  base_ = t_->Now();
+  const long log_every =
+      opts_.log_every > 0 ? opts_.log_every : std::max(1L, long(mesh_.patches.size()) / 100);
+  double unshot = solver_->UnshotFraction();
+  Emit(unshot);
+  std::vector<WorkerEvent> events;
+  for (;;) {
+    if (Stop(unshot)) break;
+    // Wait for workers only when there is nothing to shoot.
+    double t0 = ThreadCpuSeconds();
+    const double wall0 = t_->Now();
+    events.clear();
+    t_->Poll(ready_.empty() ? 0.25 : 0.0, &events);
+    r_.receive_s += since(t0);
+    r_.wait_s += t_->Now() - wall0 - since(t0);
+    for (WorkerEvent& ev : events) Handle(ev);
+    bool alive = false;
+    for (const Slot& s : slots_) alive |= s.alive;
+    if (!alive && t_->Starting() == 0 && ready_.empty()) {
+      if (r_.joined == 0) {
+        r_.status = RunStatus::kNoWorkers;
+        r_.why = "no worker could be started";
+        break;
+      }
+      Note("no workers left: the master computes the form factors itself", true);
+      r_.fell_back = true;
+      before_ = Elapsed();
+      fallback_ = std::make_unique<InProcessTransport>(mesh_, opts_.resolution, opts_.rotate,
+                                                       opts_.seed);
+      t_ = fallback_.get();
+      base_ = t_->Now();
+      slots_.clear();
+      continue;
+    }
+    // Sending work comes before shooting, so that workers never starve.
+    t0 = ThreadCpuSeconds();
+    Distribute();
+    r_.distribute_s += since(t0);
+    if (ready_.empty()) {
+      bool owned = false;
+      for (const Slot& s : slots_) owned |= s.Owned() > 0;
+      if (!owned && alive) {  // nothing left with power to shoot
+        r_.status = RunStatus::kConverged;
+        break;
+      }
+      continue;
+    }
+    t0 = ThreadCpuSeconds();
+    proto::Column c = std::move(ready_.front());
+    ready_.pop_front();
+    solver_->Shoot(c.patch, c.ff);
+    taken_[c.patch] = 0;
+    ++r_.columns;
+    unshot = solver_->UnshotFraction();
+    r_.shoot_s += since(t0);
+    if (solver_->shots() % log_every == 0) Emit(unshot);
+  }
+  if (solver_->shots() % log_every != 0) Emit(unshot);  // the last state, once
+  r_.shots = solver_->shots();
+  r_.seconds = Elapsed();
+  r_.unshot = unshot;
+  r_.bytes_sent = t_->BytesSent();
+  r_.bytes_received = t_->BytesReceived();
+  return r_;
+}
+
+}  // namespace
+
+RunResult RunMaster(const Mesh& mesh, const RunOptions& opts, Solver* solver, Transport* transport,
+              const std::function<void(const Sample&)>& sample,
+              const std::function<void(const std::string&, bool)>& note) {
+  Scheduler s(mesh, opts, solver, transport, sample, note);
+  return s.Run();
+}
+
 RunResult RunSequential(const Mesh& mesh, const RunOptions& opts, Solver* solver,
                         const std::function<void(const Sample&)>& sample) {
-  using Clock = std::chrono::steady_clock;
-  const auto start = Clock::now();
-  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
-  Hemicube hemicube(opts.resolution);
-  const long npatch = long(mesh.patches.size());
-  const long log_every = opts.log_every > 0 ? opts.log_every : std::max(1L, npatch / 100);
-  // Not converging: the unshot fraction has not fallen by 1% for this many
-  // shots (20 sweeps over the patches). Progress that slow (ρ → 1 without
-  // overshooting) or none at all (ρ = 1) would not finish in useful time.
-  const long stall = std::max(1000L, 20 * npatch);
-  double best = HUGE_VAL;
-  long best_at = 0;
-  RunResult r;
-  std::vector<FormFactor> column;
-  auto emit = [&](double unshot) {
-    if (sample) sample({elapsed(), solver->shots(), 1, long(mesh.elems.size()), unshot});
-  };
-  double unshot = solver->UnshotFraction();
-  emit(unshot);
-  for (;;) {
-    const long shots = solver->shots();
-    if (solver->Dark()) { r.status = RunStatus::kConverged; r.why = "the scene emits no light"; break; }
-    if (unshot < opts.epsilon) { r.status = RunStatus::kConverged; break; }
-    if (opts.stop && *opts.stop) { r.status = RunStatus::kStopped; break; }
-    if (opts.max_shots > 0 && shots >= opts.max_shots) {
-      r.status = RunStatus::kLimit;
-      r.why = "shot limit reached";
-      break;
-    }
-    if (opts.max_seconds > 0 && elapsed() >= opts.max_seconds) {
-      r.status = RunStatus::kLimit;
-      r.why = "time limit reached";
-      break;
-    }
-    if (!std::isfinite(unshot) || unshot > 1e12) {
-      r.status = RunStatus::kNotConverged;
-      r.why = "unshot energy grows without bound (does the scene reflect all light?)";
-      break;
-    }
-    if (unshot < best * 0.99) {
-      best = unshot;
-      best_at = shots;
-    } else if (shots - best_at > stall) {
-      r.status = RunStatus::kNotConverged;
-      char buf[200];
-      std::snprintf(buf, sizeof buf,
-                    "unshot energy still %.3g of emitted and not falling for %ld shots "
-                    "(reflectance too close to 1?)",
-                    unshot, stall);
-      r.why = buf;
-      break;
-    }
-    auto t0 = Clock::now();
-    const int p = solver->Select();
-    auto t1 = Clock::now();
-    if (p < 0) { r.status = RunStatus::kConverged; break; }
-    const double angle = opts.rotate ? ShotAngle(opts.seed, p, solver->TimesShot(p)) : 0.0;
-    hemicube.Column(mesh, p, angle, &column, &r.columns);
-    auto t2 = Clock::now();
-    solver->Shoot(p, column);
-    unshot = solver->UnshotFraction();
-    auto t3 = Clock::now();
-    r.select_s += std::chrono::duration<double>(t1 - t0).count();
-    r.shoot_s += std::chrono::duration<double>(t3 - t2).count();
-    if (solver->shots() % log_every == 0) emit(unshot);
-  }
-  if (solver->shots() % log_every != 0) emit(unshot);  // the last state, once
-  r.shots = solver->shots();
-  r.seconds = elapsed();
-  r.unshot = unshot;
-  return r;
+  InProcessTransport t(mesh, opts.resolution, opts.rotate, opts.seed);
+  return RunMaster(mesh, opts, solver, &t, sample, nullptr);
 }

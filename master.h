@@ -52,7 +52,11 @@ class Solver {
   const Mesh& mesh_;
   bool overshoot_;
   std::vector<glm::dvec3> b_;       // per element
+  std::vector<glm::dvec3> rho_per_area_;  // per element: ρ / A, for Shoot
+  std::vector<int32_t> patch_of_;   // per element, compact for Shoot
   std::vector<glm::dvec3> unshot_;  // per patch
+  std::vector<double> fsum_;        // per patch: Σ F within one Shoot
+  std::vector<int32_t> touched_;    // patches with fsum_ != 0
   std::vector<int> times_shot_;
   glm::dvec3 unshot_sum_{0.0};      // Σ unshot·area, kept incrementally
   glm::dvec3 reflect_{1.0};         // 1/(1−ρ̄): ambient interreflection factor
@@ -69,6 +73,7 @@ struct RunOptions {
   bool rotate = true;       // turn the hemicube per shot against aliasing
   unsigned seed = 1;
   long log_every = 0;       // shots between samples; 0: patches / 100
+  int queue = 0;            // patches owned per worker (high mark); 0: automatic
   const volatile std::sig_atomic_t* stop = nullptr;  // set by SIGINT/SIGTERM
 };
 
@@ -80,25 +85,46 @@ struct Sample {
   double unshot;
 };
 
-enum class RunStatus { kConverged, kLimit, kStopped, kNotConverged };
+enum class RunStatus { kConverged, kLimit, kStopped, kNotConverged, kNoWorkers };
 
 struct RunResult {
   RunStatus status = RunStatus::kConverged;
-  std::string why;          // for kNotConverged and kLimit
+  std::string why;          // for kNotConverged, kLimit and kNoWorkers
   long shots = 0;
   double seconds = 0;
   double unshot = 0;
-  ColumnStats columns;      // worker side: form factors
-  double select_s = 0;      // master side: choosing shooters
-  double shoot_s = 0;       // master side: shooting
+  // The master's time (paper graph 1) in CPU seconds of its thread.
+  double distribute_s = 0;  // selecting patches and queueing them
+  double receive_s = 0;     // transport: reading, decoding, sending
+  double shoot_s = 0;       // shooting columns
+  double subdivide_s = 0;   // adaptive subdivision
+  double wait_s = 0;        // blocked waiting for workers (wall seconds)
+  // The workers' side.
+  double worker_s = 0;      // Σ column compute time (CPU)
+  long columns = 0;         // columns received and shot
+  long stale = 0;           // columns for assignments no longer outstanding
+  int joined = 0, lost = 0; // workers that joined, that were lost
+  bool fell_back = false;   // every worker was lost: the master computed
+  uint64_t bytes_sent = 0, bytes_received = 0;
 };
 
 // The hemicube angle for the k-th shot of patch p: a hash, so that any
 // process computing that column turns the hemicube alike.
 double ShotAngle(unsigned seed, int patch, int k);
 
-// Runs to a stop in this process. `sample` (may be empty) is called every
-// log_every shots and once at the end.
+class Transport;
+
+// The master (paper §4): selects patches into per-worker queues, keeps
+// the workers busy, shoots the columns they return, stops by the rules
+// of RunOptions. Drives any Transport; an InProcessTransport gives the
+// sequential algorithm. `sample` (may be empty) is called every log_every
+// shots and once at the end; `note` (may be empty) gets one line when a
+// worker joins, or, as a warning, when one is lost.
+RunResult RunMaster(const Mesh& mesh, const RunOptions& opts, Solver* solver, Transport* transport,
+              const std::function<void(const Sample&)>& sample,
+              const std::function<void(const std::string&, bool warning)>& note);
+
+// RunMaster() with the master's own process as the only worker.
 RunResult RunSequential(const Mesh& mesh, const RunOptions& opts, Solver* solver,
                         const std::function<void(const Sample&)>& sample);
 

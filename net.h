@@ -38,10 +38,14 @@ enum class Msg : uint8_t {
 };
 const char* MsgName(Msg m);
 
+// This build's identity, sent in Hello: version, protocol and the
+// compiler, so that master and workers build identical meshes.
+std::string BuildId();
+
 struct Hello {
   uint32_t magic = kMagic;
   uint16_t version = kVersion;
-  std::string build;  // BuildId() of the sender: both ends must agree
+  std::string build = BuildId();  // both ends must agree
 };
 
 // What a worker needs to build the master's mesh bit for bit and to
@@ -69,6 +73,8 @@ struct Column {
   int32_t patch = 0;
   int32_t k = 0;
   double compute_s = 0;  // worker CPU seconds for this column
+  double wait_s = 0;     // seconds it waited in the worker before that:
+                         // the master subtracts both from the round trip
   std::vector<FormFactor> ff;  // increasing elem, f > 0
 };
 
@@ -113,10 +119,6 @@ class FrameReader {
   size_t pos_ = 0;
   bool bad_ = false;
 };
-
-// This build's identity, sent in Hello: version, protocol and the
-// compiler, so that master and workers build identical meshes.
-std::string BuildId();
 
 // A hash of the mesh geometry and hierarchy (vertex bits, element
 // vertices, parents), to check that a worker built what the master has.

@@ -1,8 +1,10 @@
 // radiosity: main, options and usage. Everything else lives in the modules
-// (scene, mesh, hemicube, master, results, image); see README.md.
+// (scene, mesh, hemicube, master, transport, net, worker, results, image);
+// see README.md.
 #include <getopt.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <csignal>
@@ -17,6 +19,8 @@
 #include "mesh.h"
 #include "results.h"
 #include "scene.h"
+#include "transport.h"
+#include "worker.h"
 
 #ifndef RADIOSITY_VERSION
 #define RADIOSITY_VERSION "0.1"
@@ -27,13 +31,22 @@ namespace {
 // Exit status, mirrored in man/radiosity.1 (EXIT STATUS).
 enum ExitStatus {
   kExitOk = 0,       // done, or stopped on request
-  kExitFailure = 1,  // run-time failure: did not converge, I/O error
+  kExitFailure = 1,  // run-time failure: did not converge, no worker, I/O error
   kExitUsage = 2,    // bad usage or bad input
 };
+
+// Local workers beyond the cores only share them; the cap keeps a typo
+// (-j 1000000) from forking without end.
+constexpr long kMaxLocalWorkers = 256;
 
 const char kUsage[] =
     "usage: radiosity [options] SCENE.obj\n"
     "  -o, --out DIR          where results go (default: out)\n"
+    "  -j, --workers N        local worker processes (default: online cores);\n"
+    "                         0: the master computes form factors itself\n"
+    "      --queue N          patches queued per worker (default: automatic, 3-10)\n"
+    "      --timeout SEC      drop a worker silent this long (default 10)\n"
+    "      --worker-cmd CMD   start local workers with CMD --worker\n"
     "  -r, --resolution R     hemicube pixels across the top face (default 256)\n"
     "  -e, --epsilon E        stop when unshot energy < E x emitted (default 1e-3)\n"
     "  -s, --shots N          stop after N shots\n"
@@ -51,7 +64,8 @@ const char kUsage[] =
     "  -q, --quiet            no messages but errors and warnings\n"
     "  -v, --verbose          a line per progress sample\n"
     "      --version          print the version\n"
-    "  -h, --help             this help\n";
+    "  -h, --help             this help\n"
+    "       radiosity --worker   speak the worker protocol on stdin/stdout\n";
 
 volatile std::sig_atomic_t g_stop = 0;
 
@@ -121,10 +135,15 @@ bool MakeDirs(const std::string& path, std::string* err) {
 int main(int argc, char** argv) {
   enum {
     kNoOvershoot = 256, kReference, kPatchSize, kElements, kNoRotate, kSeed,
-    kLogEvery, kCamera, kSize, kFormat, kVersion,
+    kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
   };
   static const option kLong[] = {
       {"out", required_argument, nullptr, 'o'},
+      {"workers", required_argument, nullptr, 'j'},
+      {"queue", required_argument, nullptr, kQueue},
+      {"timeout", required_argument, nullptr, kTimeout},
+      {"worker", no_argument, nullptr, kWorker},
+      {"worker-cmd", required_argument, nullptr, kWorkerCmd},
       {"resolution", required_argument, nullptr, 'r'},
       {"epsilon", required_argument, nullptr, 'e'},
       {"shots", required_argument, nullptr, 's'},
@@ -149,11 +168,20 @@ int main(int argc, char** argv) {
   RunOptions run;
   MeshOptions mesh_opts;
   int width = 512, height = 512, verbosity = 1;
+  long workers = std::max(1L, sysconf(_SC_NPROCESSORS_ONLN));
+  bool worker_mode = false;
+  std::string worker_cmd;
+  PoolOptions pool_opts;
   opterr = 0;
   int c;
-  while ((c = getopt_long(argc, argv, ":o:r:e:s:t:qvh", kLong, nullptr)) != -1) {
+  while ((c = getopt_long(argc, argv, ":o:j:r:e:s:t:qvh", kLong, nullptr)) != -1) {
     switch (c) {
       case 'o': out_dir = optarg; break;
+      case 'j': workers = Integer("--workers", optarg, 0, kMaxLocalWorkers); break;
+      case kQueue: run.queue = int(Integer("--queue", optarg, 1, 64)); break;
+      case kTimeout: pool_opts.timeout_s = Number("--timeout", optarg, 0.5, 86400); break;
+      case kWorker: worker_mode = true; break;
+      case kWorkerCmd: worker_cmd = optarg; break;
       case 'r': {
         run.resolution = int(Integer("--resolution", optarg, 8, Hemicube::kMaxResolution));
         if (run.resolution % 2) BadOption("--resolution", optarg, "must be even");
@@ -189,6 +217,13 @@ int main(int argc, char** argv) {
       case ':': Die(kExitUsage, std::string("option ") + argv[optind - 1] + " needs a value (try 'radiosity --help')");
       default: Die(kExitUsage, std::string("unknown option ") + argv[optind - 1] + " (try 'radiosity --help')");
     }
+  }
+  if (worker_mode) {
+    if (optind != argc) Die(kExitUsage, "--worker takes no scene: the master sends it");
+    std::string err;
+    const int status = RunWorker(0, 1, &err);
+    if (status != 0) std::fprintf(stderr, "radiosity: worker: %s\n", err.c_str());
+    return status;
   }
   if (optind != argc - 1) {
     std::fputs(kUsage, stderr);
@@ -237,8 +272,49 @@ int main(int argc, char** argv) {
   if (solver.Dark())  // a legal scene, but most likely a missing Ke
     std::fprintf(stderr, "radiosity: warning: %s: no face emits light (Ke); every B is 0\n",
                  scene_path.c_str());
-  RunResult result = RunSequential(mesh, run, &solver, sample);
+  std::unique_ptr<Transport> transport;
+  if (workers == 0) {
+    transport = std::make_unique<InProcessTransport>(mesh, run.resolution, run.rotate, run.seed);
+  } else {
+    std::signal(SIGPIPE, SIG_IGN);  // a dead worker is an error on its connection
+    proto::SceneSetup setup{scene, mesh_opts, run.resolution, run.rotate, run.seed};
+    auto pool = std::make_unique<WorkerPool>(setup, mesh, pool_opts);
+    if (pool->SceneTooLarge())
+      Die(kExitUsage, scene_path + ": too large to send to workers (protocol limit " +
+                          std::to_string(proto::kMaxFrame >> 20) + " MiB); use -j 0");
+    const std::vector<std::string> cmd =
+        worker_cmd.empty() ? std::vector<std::string>{SelfExe(), "--worker"}
+                           : std::vector<std::string>{"/bin/sh", "-c", "exec " + worker_cmd + " --worker"};
+    for (long i = 0; i < workers; ++i) {
+      pid_t pid = 0;
+      std::unique_ptr<Conn> conn = SpawnLocal(cmd, &pid, &err);
+      const std::string name = "local worker " + std::to_string(i + 1);
+      if (conn)
+        pool->Add(std::move(conn), name + " (pid " + std::to_string(pid) + ")");
+      else
+        std::fprintf(stderr, "radiosity: %s: %s\n", name.c_str(), err.c_str());
+    }
+    transport = std::move(pool);
+  }
+  auto note = [&](const std::string& line, bool warning) {
+    if (warning || verbosity >= 2) std::fprintf(stderr, "radiosity: %s\n", line.c_str());
+  };
+  RunResult result = RunMaster(mesh, run, &solver, transport.get(), sample, note);
+  transport->Shutdown();
+  if (verbosity >= 2)
+    std::fprintf(stderr,
+                 "radiosity: master: %.3f s distributing, %.3f s receiving, %.3f s shooting, "
+                 "%.3f s waiting; "
+                 "workers: %d joined, %d lost, %ld columns in %.3f s, %ld stale; "
+                 "%.0f bytes/shot sent, %.0f received\n",
+                 result.distribute_s, result.receive_s, result.shoot_s, result.wait_s,
+                 result.joined, result.lost,
+                 result.columns, result.worker_s, result.stale,
+                 double(result.bytes_sent) / std::max(1L, result.shots),
+                 double(result.bytes_received) / std::max(1L, result.shots));
   if (!log.Close(&err)) Die(kExitFailure, err);
+  if (result.status == RunStatus::kNoWorkers)
+    Die(kExitFailure, result.why + "; no results written");
   if (result.status == RunStatus::kNotConverged)
     Die(kExitFailure, "did not converge after " + std::to_string(result.shots) + " shots: " +
                           result.why + "; no results written");

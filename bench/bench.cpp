@@ -53,7 +53,7 @@ ToTarget Reach(const Scene& scene, const Mesh& mesh, int res, bool overshoot,
   Solver s2(mesh, overshoot);
   RunResult r = RunSequential(mesh, o, &s2, nullptr);
   t.seconds = r.seconds;
-  t.master_per_shot_us = 1e6 * (r.select_s + r.shoot_s) / std::max(1L, r.shots);
+  t.master_per_shot_us = 1e6 * (r.distribute_s + r.shoot_s) / std::max(1L, r.shots);
   return t;
 }
 

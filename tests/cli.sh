@@ -9,8 +9,9 @@
 SCENES=$(cd "$(dirname "$0")/../scenes" && pwd)
 CB=$SCENES/cornell.obj
 
-# Outputs of a converged run.
-run_rad "$T/cb" -r 64 "$CB"
+# Outputs of a converged run. Sequential (-j 0) here: with workers the
+# shooting order follows their timing, so only -j 0 repeats bit for bit.
+run_rad "$T/cb" -j 0 -r 64 "$CB"
 [ "$RC" -eq 0 ] && pass "cornell -r 64 exit 0" || fail "cornell -r 64 (got exit $RC, want 0)"
 rows=$(($(wc -l <"$T/cb/result.csv") - 1))
 faces=$(grep -c '^f ' "$CB")
@@ -30,7 +31,7 @@ run_rad "$T/ppm" -r 32 -s 20 --format ppm --size 64x48 "$CB"
   && pass "--format ppm --size 64x48" || fail "--format ppm --size 64x48 (header $(head -c 12 "$T/ppm/final.ppm" | tr '\n' ' '))"
 
 # --reference: log.csv carries rms; against itself at the end it is ~0.
-run_rad "$T/ref" -r 64 --reference "$T/cb/result.csv" --log-every 50 "$CB"
+run_rad "$T/ref" -j 0 -r 64 --reference "$T/cb/result.csv" --log-every 50 "$CB"
 first=$(sed -n 2p "$T/ref/log.csv" | cut -d, -f7)
 final=$(tail -1 "$T/ref/log.csv" | cut -d, -f7)
 awk -v a="$first" -v b="$final" 'BEGIN { exit !(a > 0.1 && b < 1e-6) }' \
@@ -38,10 +39,10 @@ awk -v a="$first" -v b="$final" 'BEGIN { exit !(a > 0.1 && b < 1e-6) }' \
   || fail "rel_rms from $first to $final (want > 0.1 to < 1e-6)"
 
 # The same run twice gives the same numbers (hemicube turns are seeded).
-run_rad "$T/again" -r 64 "$CB"
+run_rad "$T/again" -j 0 -r 64 "$CB"
 cmp -s "$T/cb/result.csv" "$T/again/result.csv" && pass "a second run gives an identical result.csv" \
   || fail "a second run differs: $(diff "$T/cb/result.csv" "$T/again/result.csv" | head -3 | tr '\n' ' ')"
-run_rad "$T/seed" -r 64 --seed 7 "$CB"
+run_rad "$T/seed" -j 0 -r 64 --seed 7 "$CB"
 cmp -s "$T/cb/result.csv" "$T/seed/result.csv" && fail "--seed 7 gives the same hemicube turns as seed 1" \
   || pass "--seed changes the hemicube turns"
 
@@ -74,6 +75,11 @@ bad_option --format gif "$CB"
 bad_option --camera "1 2 3" "$CB"
 bad_option --patch-size 0 "$CB"
 bad_option --no-such-option "$CB"
+bad_option -j -1 "$CB"
+bad_option -j 100000 "$CB"
+bad_option --queue 0 "$CB"
+bad_option --timeout 0 "$CB"
+bad_option --worker "$CB"
 bad_option "$CB" -r
 timeout 20 "$RADIOSITY" >/dev/null 2>"$T/none.err"; rc=$?
 [ "$rc" -eq 2 ] && grep -q usage "$T/none.err" && pass "no scene: usage, exit 2" || fail "no scene (exit $rc)"

@@ -171,3 +171,36 @@ check_inward() {
   if [ -n "$bad" ]; then fail "$1: test scene faces inward (got outward faces:$bad, want none)"; return 1; fi
   return 0
 }
+
+# csv_diff A B: the largest per-face, per-channel difference between two
+# result.csv files of one scene, relative to the face's B in B (faces
+# darker than 1% of the mean B are compared against that 1%, so that
+# nearly black faces do not turn noise into huge ratios). Prints
+# "PERCENT FACE", or "mismatch" when the files differ in faces.
+csv_diff() {
+  awk -F, '
+    FNR == 1 { next }
+    NR == FNR { a[$1] = $4 " " $5 " " $6; next }
+    { if (!($1 in a)) { bad = 1; exit }; b[$1] = $4 " " $5 " " $6; m += $4 + $5 + $6; n += 3 }
+    END {
+      if (bad || length(a) != length(b)) { print "mismatch"; exit }
+      floor = 0.01 * m / n; worst = 0; wf = 0
+      for (f in b) { split(a[f], x, " "); split(b[f], y, " ")
+        for (c = 1; c <= 3; c++) { d = x[c] - y[c]; if (d < 0) d = -d
+          r = d / (y[c] > floor ? y[c] : floor); if (r > worst) { worst = r; wf = f } } }
+      printf "%.4f %s\n", 100 * worst, wf }' "$1" "$2"
+}
+
+# check_same WHAT A B TOL_PERCENT: csv_diff within TOL percent.
+check_same() {
+  local what=$1 d
+  d=$(csv_diff "$2" "$3")
+  case $d in
+    mismatch|"") fail "$what (result.csv files differ in faces)" ;;
+    *) if awk -v d="${d% *}" -v t="$4" 'BEGIN { exit !(d <= t) }'; then
+         pass "$what (worst face ${d#* } differs by ${d% *}%, tol $4%)"
+       else
+         fail "$what (worst face ${d#* } differs by ${d% *}% > tol $4%)"
+       fi ;;
+  esac
+}

@@ -2,6 +2,7 @@
 #ifndef RADIOSITY_TESTS_TEST_UTIL_H
 #define RADIOSITY_TESTS_TEST_UTIL_H
 
+#include <cstdlib>
 #include <vector>
 
 #include "mesh.h"
@@ -51,6 +52,7 @@ inline Scene Box(double size, std::vector<glm::dvec3> kd, std::vector<glm::dvec3
       {{0, 0, 0}, {L, 0, 0}, {L, L, 0}, {0, L, 0}},  // z = 0, +z
       {{0, 0, L}, {0, L, L}, {L, L, L}, {L, 0, L}},  // z = L, -z
   };
+  if ((kd.size() != 1 && kd.size() != 6) || (ke.size() != 1 && ke.size() != 6)) std::abort();
   for (size_t i = 0; i < faces.size(); ++i)
     AddFace(&s, faces[i], kd[kd.size() == 1 ? 0 : i], ke[ke.size() == 1 ? 0 : i]);
   return s;

@@ -1,0 +1,208 @@
+// The master's scheduler against a fake transport: no processes, every
+// assignment visible, losses and late columns on cue. Columns are real
+// hemicube columns so that runs converge to real answers.
+#include <algorithm>
+#include <map>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "master.h"
+#include "results.h"
+#include "test_util.h"
+#include "transport.h"
+
+namespace {
+
+class FakeTransport : public Transport {
+ public:
+  FakeTransport(const Mesh& mesh, int workers) : mesh_(mesh), hemicube_(32), queue_(workers) {}
+  int Workers() const override { return int(queue_.size()); }
+  int Starting() const override { return joined_ ? 0 : int(queue_.size()); }
+  std::string Name(int w) const override { return "fake " + std::to_string(w); }
+  void Assign(int w, const proto::Assignment& a) override {
+    ASSERT_FALSE(lost_.count(w)) << "assignment to a lost worker";
+    queue_[w].push_back(a);
+    log_.push_back({w, a.patch});
+    max_outstanding_ = std::max(max_outstanding_, queue_[w].size());
+  }
+  void Divide(const std::vector<int32_t>&) override {}
+  double Now() override { return now_; }
+
+  // Each Poll: the first joins everyone; later ones answer one assignment
+  // of each worker in turn (round robin), as workers of equal speed would.
+  void Poll(double, std::vector<WorkerEvent>* events) override {
+    now_ += 1e-3;
+    if (!joined_) {
+      joined_ = true;
+      for (int w = 0; w < Workers(); ++w)
+        if (!never_join_) events->push_back({WorkerEvent::kJoined, w, {}, ""});
+        else events->push_back({WorkerEvent::kLost, w, {}, "never started"});
+      if (never_join_) lost_all_ = true;
+      return;
+    }
+    ++polls_;
+    if (lose_at_.count(polls_)) {
+      const int w = lose_at_[polls_];
+      lost_.insert(w);
+      queue_[w].clear();
+      events->push_back({WorkerEvent::kLost, w, {}, "killed"});
+    }
+    for (int i = 0; i < Workers(); ++i) {
+      const int w = (next_ + i) % Workers();
+      if (lost_.count(w) || queue_[w].empty()) continue;
+      next_ = w + 1;
+      const proto::Assignment a = queue_[w].front();
+      queue_[w].erase(queue_[w].begin());
+      WorkerEvent ev{WorkerEvent::kColumn, w, {}, ""};
+      ev.column.patch = a.patch;
+      ev.column.k = a.k;
+      ev.column.compute_s = 1e-3;
+      hemicube_.Column(mesh_, a.patch, 0.0, &ev.column.ff);
+      events->push_back(ev);
+      if (duplicate_at_ == polls_) events->push_back(ev);  // a late copy
+      return;
+    }
+  }
+
+  const Mesh& mesh_;
+  Hemicube hemicube_;
+  std::vector<std::vector<proto::Assignment>> queue_;
+  std::vector<std::pair<int, int>> log_;  // (worker, patch) in assignment order
+  std::map<long, int> lose_at_;           // poll number -> worker lost then
+  std::set<int> lost_;
+  long duplicate_at_ = -1;
+  bool never_join_ = false, joined_ = false, lost_all_ = false;
+  size_t max_outstanding_ = 0;
+  long polls_ = 0;
+  int next_ = 0;
+  double now_ = 0;
+};
+
+// A closed box whose six walls are lights of different strength, so that
+// the order of the first selections is known: strongest first.
+Scene Lights() {
+  return Box(1.0, {glm::dvec3(0.5)},
+             {glm::dvec3(6), glm::dvec3(5), glm::dvec3(4), glm::dvec3(3), glm::dvec3(2),
+              glm::dvec3(1)});
+}
+
+MeshOptions OnePatchPerFace() {
+  MeshOptions o;
+  o.patch_size = 2.0;  // each wall is one patch
+  return o;
+}
+
+RunOptions Opts() {
+  RunOptions o;
+  o.resolution = 32;
+  o.epsilon = 1e-3;
+  o.rotate = false;
+  return o;
+}
+
+TEST(Scheduler, FirstLightsGoToDifferentWorkers) {
+  Scene s = Lights();
+  Mesh m = MakeMesh(s, OnePatchPerFace());
+  ASSERT_EQ(m.patches.size(), 6u);
+  FakeTransport t(m, 3);
+  Solver solver(m, true);
+  RunOptions o = Opts();
+  o.queue = 2;
+  o.max_shots = 1;
+  RunMaster(m, o, &solver, &t, nullptr, nullptr);
+  // Cyclic fill: worker 0 gets the strongest light, worker 1 the second,
+  // worker 2 the third, then round again.
+  ASSERT_GE(t.log_.size(), 6u);
+  std::vector<int> first_of(3, -1);
+  for (auto [w, p] : t.log_)
+    if (first_of[w] < 0) first_of[w] = p;
+  EXPECT_EQ(m.patches[first_of[0]].face, 0);
+  EXPECT_EQ(m.patches[first_of[1]].face, 1);
+  EXPECT_EQ(m.patches[first_of[2]].face, 2);
+}
+
+TEST(Scheduler, QueuesStayWithinTheHighMark) {
+  Scene s = Box(1.0, {glm::dvec3(0.6)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  FakeTransport t(m, 2);
+  Solver solver(m, true);
+  RunOptions o = Opts();
+  o.queue = 4;
+  RunResult r = RunMaster(m, o, &solver, &t, nullptr, nullptr);
+  EXPECT_EQ(r.status, RunStatus::kConverged);
+  EXPECT_LE(t.max_outstanding_, 4u);
+  EXPECT_GE(t.max_outstanding_, 2u);  // the pipeline was used
+  EXPECT_EQ(r.columns, r.shots);
+}
+
+// The same answer as the sequential run, and every assignment shot once.
+TEST(Scheduler, LostWorkerLosesNothing) {
+  const glm::dvec3 dark(0.0);
+  Scene s = Box(1.0, {glm::dvec3(0.7)}, {glm::dvec3(1.0), dark, dark, dark, dark, dark});
+  Mesh m = MakeMesh(s);
+  Solver seq(m, true);
+  RunOptions o = Opts();
+  o.epsilon = 1e-4;
+  InProcessTransport in(m, 32, false, 1);
+  ASSERT_EQ(RunMaster(m, o, &seq, &in, nullptr, nullptr).status, RunStatus::kConverged);
+
+  FakeTransport t(m, 3);
+  t.lose_at_[5] = 1;
+  t.lose_at_[40] = 2;
+  Solver par(m, true);
+  std::vector<std::string> notes;
+  RunResult r = RunMaster(m, o, &par, &t, nullptr,
+                    [&](const std::string& line, bool warning) {
+                      if (warning) notes.push_back(line);
+                    });
+  ASSERT_EQ(r.status, RunStatus::kConverged) << r.why;
+  EXPECT_EQ(r.lost, 2);
+  ASSERT_EQ(notes.size(), 2u);
+  EXPECT_NE(notes[0].find("fake 1: lost (killed)"), std::string::npos) << notes[0];
+  const auto a = FaceRadiosity(m, seq.radiosity()), b = FaceRadiosity(m, par.radiosity());
+  for (size_t f = 0; f < a.size(); ++f)
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(b[f][c], a[f][c], 0.005 * a[f][c] + 1e-9) << f;
+  // Worker 1's patches went to others: each (patch, k) assigned at most
+  // once to a worker that answered it.
+  long shots = 0;
+  for (size_t p = 0; p < m.patches.size(); ++p) shots += par.TimesShot(int(p));
+  EXPECT_EQ(shots, r.shots);
+}
+
+TEST(Scheduler, LateCopyOfAColumnIsNotShotTwice) {
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  FakeTransport t(m, 2);
+  t.duplicate_at_ = 3;
+  Solver solver(m, true);
+  RunResult r = RunMaster(m, Opts(), &solver, &t, nullptr, nullptr);
+  EXPECT_EQ(r.stale, 1);
+  EXPECT_EQ(r.columns, r.shots);
+}
+
+TEST(Scheduler, MasterTakesOverWhenAllWorkersAreLost) {
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  FakeTransport t(m, 2);
+  t.lose_at_[3] = 0;
+  t.lose_at_[4] = 1;
+  Solver solver(m, true);
+  RunResult r = RunMaster(m, Opts(), &solver, &t, nullptr, nullptr);
+  EXPECT_EQ(r.status, RunStatus::kConverged);
+  EXPECT_TRUE(r.fell_back);
+  EXPECT_LT(solver.UnshotFraction(), 1e-3);
+}
+
+TEST(Scheduler, NoWorkerAtAll) {
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  FakeTransport t(m, 2);
+  t.never_join_ = true;
+  Solver solver(m, true);
+  RunResult r = RunMaster(m, Opts(), &solver, &t, nullptr, nullptr);
+  EXPECT_EQ(r.status, RunStatus::kNoWorkers);
+  EXPECT_EQ(r.shots, 0);
+}
+
+}  // namespace

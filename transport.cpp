@@ -1,0 +1,374 @@
+#include "transport.h"
+
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <cstring>
+#include <ctime>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "master.h"
+
+namespace {
+
+double WallNow() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+std::string DescribeStatus(int status) {
+  if (WIFEXITED(status)) {
+    if (WEXITSTATUS(status) == 127) return "could not be started (exit status 127)";
+    return "exited with status " + std::to_string(WEXITSTATUS(status));
+  }
+  if (WIFSIGNALED(status))
+    return "killed by signal " + std::to_string(WTERMSIG(status)) + " (" +
+           strsignal(WTERMSIG(status)) + ")";
+  return "ended";
+}
+
+// A worker process on this machine, on one end of a socketpair.
+class LocalConn : public Conn {
+ public:
+  LocalConn(int fd, pid_t pid) : fd_(fd), pid_(pid) {}
+  ~LocalConn() override { Close(true); }
+  int fd() const override { return fd_; }
+  long Read(char* buf, size_t n) override { return long(::read(fd_, buf, n)); }
+  long Write(const char* buf, size_t n) override {
+    return long(::send(fd_, buf, n, MSG_NOSIGNAL));  // a dead peer is an error, not SIGPIPE
+  }
+  std::string Close(bool kill) override {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = -1;
+    if (pid_ <= 0) return "";
+    int status = 0;
+    // A worker exits on end of stream; give it a moment before SIGKILL
+    // (which also ends a worker stopped with SIGSTOP).
+    for (int i = 0; i < (kill ? 0 : 100); ++i) {
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return DescribeStatus(status);
+      }
+      ::usleep(10000);
+    }
+    if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+      pid_ = -1;
+      return DescribeStatus(status);
+    }
+    ::kill(pid_, SIGKILL);
+    ::waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return "";
+  }
+
+ private:
+  int fd_;
+  pid_t pid_;
+};
+
+bool IsAgain() { return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR; }
+
+}  // namespace
+
+double ThreadCpuSeconds() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+std::string SelfExe() {
+  char buf[4096];
+  ssize_t n = ::readlink("/proc/self/exe", buf, sizeof buf - 1);
+  if (n <= 0) return "";
+  buf[n] = 0;
+  return buf;
+}
+
+std::unique_ptr<Conn> SpawnLocal(const std::vector<std::string>& argv, pid_t* pid_out,
+                                 std::string* err) {
+  CHECK(!argv.empty());
+  int sv[2];
+  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0) {
+    *err = std::string("socketpair: ") + std::strerror(errno);
+    return nullptr;
+  }
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  pid_t pid = ::fork();
+  if (pid < 0) {
+    *err = std::string("fork: ") + std::strerror(errno);
+    ::close(sv[0]);
+    ::close(sv[1]);
+    return nullptr;
+  }
+  if (pid == 0) {
+    // Its own process group: a Ctrl-C at the terminal reaches only the
+    // master, which then stops the workers in order.
+    ::setpgid(0, 0);
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+    std::signal(SIGPIPE, SIG_DFL);
+    if (::dup2(sv[1], 0) < 0 || ::dup2(sv[1], 1) < 0) ::_exit(127);
+    ::execv(args[0], args.data());
+    ::_exit(127);
+  }
+  ::close(sv[1]);
+  ::fcntl(sv[0], F_SETFL, ::fcntl(sv[0], F_GETFL) | O_NONBLOCK);
+  *pid_out = pid;
+  return std::make_unique<LocalConn>(sv[0], pid);
+}
+
+// ---------------------------------------------------------------------------
+
+InProcessTransport::InProcessTransport(const Mesh& mesh, int resolution, bool rotate,
+                                       unsigned seed)
+    : mesh_(mesh), hemicube_(resolution), rotate_(rotate), seed_(seed) {}
+
+void InProcessTransport::Assign(int w, const proto::Assignment& a) {
+  CHECK(w == 0);
+  todo_.push_back(a);
+}
+
+void InProcessTransport::Poll(double, std::vector<WorkerEvent>* events) {
+  if (!joined_) {
+    joined_ = true;
+    events->push_back({WorkerEvent::kJoined, 0, {}, ""});
+    return;
+  }
+  if (todo_.empty()) return;
+  const proto::Assignment a = todo_.front();
+  todo_.erase(todo_.begin());
+  WorkerEvent ev{WorkerEvent::kColumn, 0, {}, ""};
+  ev.column.patch = a.patch;
+  ev.column.k = a.k;
+  const double t0 = WallNow();
+  hemicube_.Column(mesh_, a.patch, rotate_ ? ShotAngle(seed_, a.patch, a.k) : 0.0,
+                   &ev.column.ff, &stats_);
+  ev.column.compute_s = WallNow() - t0;
+  events->push_back(std::move(ev));
+}
+
+double InProcessTransport::Now() { return WallNow(); }
+
+// ---------------------------------------------------------------------------
+
+WorkerPool::WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh,
+                       const PoolOptions& opts)
+    : mesh_(mesh), mesh_hash_(proto::MeshHash(mesh)), opts_(opts),
+      epoch_(WallNow()) {
+  proto::EncodeHello(proto::Hello(), &scene_frame_);
+  proto::EncodeScene(setup, &scene_frame_);
+}
+
+WorkerPool::~WorkerPool() { Shutdown(); }
+
+double WorkerPool::Now() { return WallNow() - epoch_; }
+
+void WorkerPool::Add(std::unique_ptr<Conn> conn, const std::string& name) {
+  Worker w;
+  w.name = name;
+  w.conn = std::move(conn);
+  w.started = w.last_heard = w.last_sent = Now();
+  w.out = scene_frame_;
+  workers_.push_back(std::move(w));
+}
+
+int WorkerPool::Starting() const {
+  int n = 0;
+  for (const Worker& w : workers_) n += w.state == State::kHello || w.state == State::kReady;
+  return n;
+}
+
+void WorkerPool::Assign(int w, const proto::Assignment& a) {
+  Worker& wk = workers_[w];
+  CHECK(wk.state == State::kJoined);
+  proto::EncodeWork({a}, &wk.out);
+}
+
+void WorkerPool::Divide(const std::vector<int32_t>& elems) {
+  for (Worker& w : workers_)
+    if (w.state != State::kLost) proto::EncodeDivide(elems, &w.out);
+}
+
+void WorkerPool::Lose(int w, const std::string& why, std::vector<WorkerEvent>* events,
+                      bool ended) {
+  Worker& wk = workers_[w];
+  if (wk.state == State::kLost) return;
+  wk.state = State::kLost;
+  std::string how = wk.conn->Close(!ended);
+  events->push_back({WorkerEvent::kLost, w, {}, how.empty() ? why : why + ", " + how});
+  wk.out.clear();
+  wk.out_pos = 0;
+}
+
+void WorkerPool::Flush(int w, std::vector<WorkerEvent>* events) {
+  Worker& wk = workers_[w];
+  while (wk.state != State::kLost && wk.out_pos < wk.out.size()) {
+    long n = wk.conn->Write(wk.out.data() + wk.out_pos, wk.out.size() - wk.out_pos);
+    if (n < 0 && IsAgain()) break;
+    if (n <= 0) {
+      Lose(w, std::string("cannot send: ") + std::strerror(errno), events);
+      return;
+    }
+    wk.out_pos += size_t(n);
+    sent_ += uint64_t(n);
+    wk.last_sent = Now();
+  }
+  if (wk.out_pos == wk.out.size()) {
+    wk.out.clear();
+    wk.out_pos = 0;
+  }
+}
+
+bool WorkerPool::Handle(int w, proto::Msg type, const std::string& payload,
+                        std::vector<WorkerEvent>* events, std::string* why) {
+  using proto::Msg;
+  Worker& wk = workers_[w];
+  std::string err;
+  if (type == Msg::kError) {
+    std::string text;
+    *why = proto::DecodeError(payload, &text, &err) ? "says: " + text : "garbled error: " + err;
+    return false;
+  }
+  if (type == Msg::kHeartbeat && wk.state == State::kJoined) {
+    if (payload.empty()) return true;
+    *why = "garbled heartbeat";
+    return false;
+  }
+  switch (wk.state) {
+    case State::kHello: {
+      proto::Hello h;
+      if (type != Msg::kHello) break;
+      if (!proto::DecodeHello(payload, &h, &err)) { *why = "garbled hello: " + err; return false; }
+      if (h.magic != proto::kMagic || h.version != proto::kVersion) {
+        *why = "speaks protocol version " + std::to_string(h.version) + ", this master speaks " +
+               std::to_string(proto::kVersion) + " (build '" + h.build + "')";
+        return false;
+      }
+      if (h.build != proto::BuildId()) {
+        *why = "is another build ('" + h.build + "', this is '" + proto::BuildId() + "')";
+        return false;
+      }
+      wk.state = State::kReady;
+      return true;
+    }
+    case State::kReady: {
+      proto::Ready r;
+      if (type != Msg::kReady) break;
+      if (!proto::DecodeReady(payload, &r, &err)) { *why = "garbled ready: " + err; return false; }
+      if (r.elements != mesh_.elems.size() || r.mesh_hash != mesh_hash_) {
+        *why = "built a different mesh (" + std::to_string(r.elements) + " elements, this has " +
+               std::to_string(mesh_.elems.size()) + ")";
+        return false;
+      }
+      wk.state = State::kJoined;
+      events->push_back({WorkerEvent::kJoined, w, {}, ""});
+      return true;
+    }
+    case State::kJoined: {
+      if (type != Msg::kColumn) break;
+      WorkerEvent ev{WorkerEvent::kColumn, w, {}, ""};
+      if (!proto::DecodeColumn(payload, &ev.column, &err)) { *why = "garbled column: " + err; return false; }
+      // The decoder cannot know the mesh: ids from the wire index the
+      // master's arrays, so they are checked here (ids increase: the last
+      // is the largest).
+      const proto::Column& c = ev.column;
+      if (c.patch < 0 || size_t(c.patch) >= mesh_.patches.size() ||
+          (!c.ff.empty() && size_t(c.ff.back().elem) >= mesh_.elems.size())) {
+        *why = "sent a column out of the mesh's range";
+        return false;
+      }
+      events->push_back(std::move(ev));
+      return true;
+    }
+    case State::kLost:
+      return false;
+  }
+  *why = std::string("sent an unexpected ") + proto::MsgName(type) + " frame";
+  return false;
+}
+
+void WorkerPool::Receive(int w, std::vector<WorkerEvent>* events) {
+  Worker& wk = workers_[w];
+  char buf[65536];
+  for (;;) {
+    long n = wk.conn->Read(buf, sizeof buf);
+    if (n < 0 && IsAgain()) break;
+    if (n < 0) { Lose(w, std::string("cannot read: ") + std::strerror(errno), events, true); return; }
+    if (n == 0) { Lose(w, "closed the connection", events, true); return; }
+    received_ += uint64_t(n);
+    wk.last_heard = Now();
+    wk.in.Append(buf, size_t(n));
+    proto::Msg type;
+    std::string payload, err;
+    for (;;) {
+      proto::FrameReader::Result r = wk.in.Next(&type, &payload, &err);
+      if (r == proto::FrameReader::kNeedMore) break;
+      std::string why;
+      if (r == proto::FrameReader::kBad) why = "sent a bad frame: " + err;
+      if (r == proto::FrameReader::kBad || !Handle(w, type, payload, events, &why)) {
+        Lose(w, why, events);
+        return;
+      }
+    }
+    if (size_t(n) < sizeof buf) break;  // drained: spare the EAGAIN read
+  }
+}
+
+void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
+  const size_t before = events->size();
+  double now = Now();
+  for (size_t w = 0; w < workers_.size(); ++w) {
+    Worker& wk = workers_[w];
+    if (wk.state == State::kLost) continue;
+    if (wk.state != State::kJoined && now - wk.started > opts_.hello_s) {
+      Lose(int(w), "did not start within " + std::to_string(int(opts_.hello_s)) + " s", events);
+    } else if (wk.state == State::kJoined && now - wk.last_heard > opts_.timeout_s) {
+      char buf[80];
+      std::snprintf(buf, sizeof buf, "silent for %.1f s", now - wk.last_heard);
+      Lose(int(w), buf, events);
+    } else if (wk.state == State::kJoined && wk.out.empty() &&
+               now - wk.last_sent > opts_.heartbeat_s) {
+      proto::EncodeHeartbeat(&wk.out);
+    }
+    Flush(int(w), events);
+  }
+  std::vector<pollfd> fds;
+  std::vector<int> who;
+  for (size_t w = 0; w < workers_.size(); ++w) {
+    const Worker& wk = workers_[w];
+    if (wk.state == State::kLost) continue;
+    short want = POLLIN;
+    if (wk.out_pos < wk.out.size()) want |= POLLOUT;
+    fds.push_back({wk.conn->fd(), want, 0});
+    who.push_back(int(w));
+  }
+  if (events->size() > before) timeout = 0;
+  // Wake for heartbeats and deadlines even when nothing arrives.
+  const double wait = std::min(timeout, opts_.heartbeat_s / 2);
+  int n = ::poll(fds.data(), fds.size(), int(std::max(0.0, wait) * 1000));
+  if (n <= 0) return;
+  for (size_t i = 0; i < fds.size(); ++i) {
+    if (fds[i].revents & POLLOUT) Flush(who[i], events);
+    if (fds[i].revents & (POLLIN | POLLHUP | POLLERR)) Receive(who[i], events);
+  }
+}
+
+void WorkerPool::Shutdown() {
+  std::vector<WorkerEvent> ignored;
+  for (size_t w = 0; w < workers_.size(); ++w) {
+    Worker& wk = workers_[w];
+    if (wk.state == State::kLost) continue;
+    proto::EncodeBye(&wk.out);
+    Flush(int(w), &ignored);
+    wk.state = State::kLost;
+    wk.conn->Close(false);
+  }
+}

@@ -1,0 +1,241 @@
+#include "worker.h"
+
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <deque>
+#include <mutex>
+#include <thread>
+
+#include <poll.h>
+#include <unistd.h>
+
+#include "hemicube.h"
+#include "master.h"
+#include "mesh.h"
+#include "net.h"
+#include "transport.h"
+
+namespace {
+
+double Now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+// Frames to the master, from the main thread and the heartbeat thread.
+class Sender {
+ public:
+  explicit Sender(int fd) : fd_(fd), last_(Now()) {}
+  bool Send(const std::string& frame) {
+    std::lock_guard<std::mutex> lock(mu_);
+    size_t done = 0;
+    while (done < frame.size()) {
+      ssize_t n = ::write(fd_, frame.data() + done, frame.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) return false;
+      done += size_t(n);
+    }
+    last_ = Now();
+    return true;
+  }
+  double last() {
+    std::lock_guard<std::mutex> lock(mu_);
+    return last_;
+  }
+
+ private:
+  std::mutex mu_;
+  int fd_;
+  double last_;
+};
+
+// Sends a heartbeat whenever nothing else went out for a second, so the
+// master can tell a long column from a dead worker.
+class Heartbeat {
+ public:
+  explicit Heartbeat(Sender* out) : out_(out), thread_([this] { Loop(); }) {}
+  ~Heartbeat() {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+
+ private:
+  void Loop() {
+    std::unique_lock<std::mutex> lock(mu_);
+    while (!cv_.wait_for(lock, std::chrono::milliseconds(250), [this] { return stop_; })) {
+      if (Now() - out_->last() < 1.0) continue;
+      std::string frame;
+      proto::EncodeHeartbeat(&frame);
+      if (!out_->Send(frame)) return;
+    }
+  }
+  Sender* out_;
+  std::mutex mu_;
+  std::condition_variable cv_;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+class Worker {
+ public:
+  Worker(int in_fd, int out_fd) : in_fd_(in_fd), out_(out_fd) {}
+  int Run(std::string* err);
+
+ private:
+  enum Got { kFrame, kTimeout, kEnd, kBad };
+  // Waits up to `timeout` s for one frame.
+  Got Read(double timeout, proto::Msg* type, std::string* payload, std::string* err);
+  int Fail(const std::string& what, std::string* err) {
+    *err = what;
+    std::string frame;
+    proto::EncodeError(what, &frame);
+    out_.Send(frame);
+    return 1;
+  }
+  // Handles one frame after setup; returns false when the worker is done
+  // (*status set).
+  bool Handle(proto::Msg type, const std::string& payload, int* status, std::string* err);
+
+  int in_fd_;
+  Sender out_;
+  proto::FrameReader in_;
+  Mesh mesh_;
+  struct Todo {
+    proto::Assignment a;
+    double received;  // for Column::wait_s
+  };
+  std::deque<Todo> todo_;
+  // The master sends heartbeats when idle; this much silence means it is
+  // gone without closing the stream (a host that vanished).
+  static constexpr double kMasterTimeout = 60.0;
+};
+
+Worker::Got Worker::Read(double timeout, proto::Msg* type, std::string* payload,
+                         std::string* err) {
+  const double until = Now() + timeout;
+  for (;;) {
+    switch (in_.Next(type, payload, err)) {
+      case proto::FrameReader::kFrame: return kFrame;
+      case proto::FrameReader::kBad: return kBad;
+      case proto::FrameReader::kNeedMore: break;
+    }
+    const double left = until - Now();
+    pollfd p{in_fd_, POLLIN, 0};
+    int n = ::poll(&p, 1, left <= 0 ? 0 : int(left * 1000) + 1);
+    if (n < 0 && errno != EINTR) { *err = std::string("poll: ") + std::strerror(errno); return kBad; }
+    if (n == 0 && left <= 0) return kTimeout;
+    if (n <= 0) continue;
+    char buf[65536];
+    ssize_t got = ::read(in_fd_, buf, sizeof buf);
+    if (got < 0 && errno == EINTR) continue;
+    if (got <= 0) return kEnd;
+    in_.Append(buf, size_t(got));
+  }
+}
+
+bool Worker::Handle(proto::Msg type, const std::string& payload, int* status,
+                    std::string* err) {
+  std::string why;
+  switch (type) {
+    case proto::Msg::kWork: {
+      std::vector<proto::Assignment> work;
+      if (!proto::DecodeWork(payload, &work, &why)) break;
+      for (const proto::Assignment& a : work) {
+        if (a.patch < 0 || size_t(a.patch) >= mesh_.patches.size() || a.k < 0) {
+          why = "patch " + std::to_string(a.patch) + " out of range";
+          break;
+        }
+        todo_.push_back({a, Now()});
+      }
+      if (!why.empty()) break;
+      return true;
+    }
+    case proto::Msg::kHeartbeat: return true;
+    case proto::Msg::kBye: *status = 0; return false;
+    case proto::Msg::kError: {
+      std::string text;
+      *err = proto::DecodeError(payload, &text, &why) ? "master says: " + text : why;
+      *status = 1;
+      return false;
+    }
+    default: why = std::string("unexpected ") + proto::MsgName(type) + " frame"; break;
+  }
+  *status = Fail(why, err);
+  return false;
+}
+
+int Worker::Run(std::string* err) {
+  std::string frame;
+  proto::EncodeHello(proto::Hello(), &frame);
+  if (!out_.Send(frame)) { *err = "cannot write to the master"; return 1; }
+  proto::Msg type;
+  std::string payload, why;
+  // Setup: the master's hello, then the scene.
+  Got got = Read(kMasterTimeout, &type, &payload, &why);
+  if (got == kEnd) return 0;
+  if (got != kFrame) return Fail(got == kTimeout ? "no hello from the master" : why, err);
+  proto::Hello hello;
+  if (type != proto::Msg::kHello || !proto::DecodeHello(payload, &hello, &why))
+    return Fail("expected a hello: " + why, err);
+  if (hello.magic != proto::kMagic || hello.version != proto::kVersion ||
+      hello.build != proto::BuildId())
+    return Fail("this worker is '" + proto::BuildId() + "', the master '" + hello.build + "'", err);
+  got = Read(kMasterTimeout, &type, &payload, &why);
+  if (got == kEnd) return 0;
+  if (got != kFrame) return Fail(got == kTimeout ? "no scene from the master" : why, err);
+  proto::SceneSetup setup;
+  if (type != proto::Msg::kScene || !proto::DecodeScene(payload, &setup, &why))
+    return Fail("expected a scene: " + why, err);
+  if (!BuildMesh(setup.scene, setup.mesh, &mesh_, &why)) return Fail(why, err);
+  frame.clear();
+  proto::EncodeReady({mesh_.elems.size(), proto::MeshHash(mesh_)}, &frame);
+  if (!out_.Send(frame)) return 0;
+
+  Hemicube hemicube(setup.resolution);
+  Heartbeat heartbeat(&out_);
+  double heard = Now();
+  for (;;) {
+    // Take in everything that has arrived; wait only when idle.
+    for (;;) {
+      const double wait = todo_.empty() ? 1.0 : 0.0;
+      got = Read(wait, &type, &payload, &why);
+      if (got == kEnd) return 0;
+      if (got == kBad) return Fail(why, err);
+      if (got == kTimeout) {
+        if (!todo_.empty()) break;
+        if (Now() - heard > kMasterTimeout) { *err = "the master is silent"; return 1; }
+        continue;
+      }
+      heard = Now();
+      int status = 0;
+      if (!Handle(type, payload, &status, err)) return status;
+    }
+    const proto::Assignment a = todo_.front().a;
+    proto::Column col;
+    col.patch = a.patch;
+    col.k = a.k;
+    col.wait_s = Now() - todo_.front().received;
+    todo_.pop_front();
+    const double t0 = ThreadCpuSeconds();
+    hemicube.Column(mesh_, a.patch, setup.rotate ? ShotAngle(setup.seed, a.patch, a.k) : 0.0,
+                    &col.ff);
+    col.compute_s = ThreadCpuSeconds() - t0;
+    frame.clear();
+    proto::EncodeColumn(col, &frame);
+    if (!out_.Send(frame)) return 0;  // the master has gone: nothing to report to
+  }
+}
+
+}  // namespace
+
+int RunWorker(int in_fd, int out_fd, std::string* err) {
+  Worker w(in_fd, out_fd);
+  return w.Run(err);
+}

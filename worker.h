@@ -1,0 +1,15 @@
+// The worker: reads the protocol of doc/protocol.txt on one file
+// descriptor and writes it on another (stdin and stdout under --worker).
+// It builds the master's mesh from the scene it is sent, then computes
+// one form-factor column per assigned patch, in the order assigned, and
+// applies hierarchy edits where they fall in the stream.
+#ifndef RADIOSITY_WORKER_H
+#define RADIOSITY_WORKER_H
+
+#include <string>
+
+// Returns the process exit status: 0 after Bye or end of stream, 1 on a
+// protocol error (*err says what; the master was also sent an Error).
+int RunWorker(int in_fd, int out_fd, std::string* err);
+
+#endif
