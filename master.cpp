@@ -42,9 +42,17 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
   Resum();
 }
 
+namespace {
+double Abs(const glm::dvec3& u) { return std::abs(u.r) + std::abs(u.g) + std::abs(u.b); }
+}  // namespace
+
 void Solver::Resum() {
   unshot_sum_ = glm::dvec3(0.0);
-  for (size_t p = 0; p < unshot_.size(); ++p) unshot_sum_ += unshot_[p] * mesh_.patches[p].area;
+  abs_sum_ = 0;
+  for (size_t p = 0; p < unshot_.size(); ++p) {
+    unshot_sum_ += unshot_[p] * mesh_.patches[p].area;
+    abs_sum_ += Abs(unshot_[p]) * mesh_.patches[p].area;
+  }
 }
 
 glm::dvec3 Solver::Ambient() const {
@@ -65,7 +73,7 @@ int Solver::Select(const std::vector<char>* taken) const {
     if (taken && (*taken)[p]) continue;
     const Patch& pa = mesh_.patches[p];
     glm::dvec3 x = unshot_[p] + mesh_.faces[pa.face].rho * amb;
-    double power = (std::abs(x.r) + std::abs(x.g) + std::abs(x.b)) * pa.area;
+    double power = Abs(x) * pa.area;
     if (power > best_power) {
       best_power = power;
       best = int(p);
@@ -77,7 +85,9 @@ int Solver::Select(const std::vector<char>* taken) const {
 void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   const Patch& shooter = mesh_.patches[p];
   const glm::dvec3 x = ToShoot(p);
+  abs_sum_ -= Abs(unshot_[p]) * shooter.area;
   unshot_[p] -= x;
+  abs_sum_ += Abs(unshot_[p]) * shooter.area;
   unshot_sum_ -= x * shooter.area;
   // Power arriving at element e and reflected: ρ_e · x · F · A_shooter.
   // Per element only B changes, by that over A_e; a patch's unshot
@@ -93,25 +103,23 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     fsum_[q] += double(ff.f);
   }
   for (int32_t q : touched_) {
-    const glm::dvec3 reflected = mesh_.faces[mesh_.patches[q].face].rho * xa * fsum_[q];
-    unshot_[q] += reflected / mesh_.patches[q].area;
+    const Patch& pq = mesh_.patches[q];
+    const glm::dvec3 reflected = mesh_.faces[pq.face].rho * xa * fsum_[q];
+    abs_sum_ -= Abs(unshot_[q]) * pq.area;
+    unshot_[q] += reflected / pq.area;
+    abs_sum_ += Abs(unshot_[q]) * pq.area;
     unshot_sum_ += reflected;
     fsum_[q] = 0;
   }
   touched_.clear();
   ++times_shot_[p];
-  // The running sum drifts by rounding; a full sum every sweep bounds it.
+  // The running sums drift by rounding; a full sum every sweep bounds it.
   if (++shots_ % long(unshot_.size()) == 0) Resum();
 }
 
 double Solver::UnshotFraction() const {
   if (emitted_ == 0) return 0;
-  double s = 0;
-  for (size_t p = 0; p < unshot_.size(); ++p) {
-    const glm::dvec3& u = unshot_[p];
-    s += (std::abs(u.r) + std::abs(u.g) + std::abs(u.b)) * mesh_.patches[p].area;
-  }
-  return s / emitted_;
+  return std::max(0.0, abs_sum_) / emitted_;
 }
 
 double Solver::PowerRatio() const {

@@ -59,6 +59,7 @@ class Solver {
   std::vector<int32_t> touched_;    // patches with fsum_ != 0
   std::vector<int> times_shot_;
   glm::dvec3 unshot_sum_{0.0};      // Σ unshot·area, kept incrementally
+  double abs_sum_ = 0;              // Σ |unshot|·area (channels summed), too
   glm::dvec3 reflect_{1.0};         // 1/(1−ρ̄): ambient interreflection factor
   double total_area_ = 0, emitted_ = 0;
   long shots_ = 0;
