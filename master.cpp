@@ -9,6 +9,10 @@
 #include "check.h"
 #include "transport.h"
 
+namespace {
+double Abs(const glm::dvec3& u) { return std::abs(u.r) + std::abs(u.g) + std::abs(u.b); }
+}  // namespace
+
 Solver::Solver(const Mesh& mesh, bool overshoot)
     : mesh_(mesh),
       overshoot_(overshoot),
@@ -17,6 +21,8 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
       patch_of_(mesh.elems.size()),
       unshot_(mesh.patches.size()),
       fsum_(mesh.patches.size(), 0.0),
+      lit_(mesh.patches.size(), 0),
+      blind_(mesh.patches.size(), 0),
       times_shot_(mesh.patches.size(), 0) {
   for (size_t e = 0; e < mesh.elems.size(); ++e) {
     b_[e] = mesh.FaceOf(int(e)).emission;
@@ -28,6 +34,7 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
     const MeshFace& f = mesh.faces[mesh.patches[p].face];
     const double a = mesh.patches[p].area;
     unshot_[p] = f.emission;
+    lit_[p] = Abs(f.emission) > 0;
     total_area_ += a;
     emitted_ += (f.emission.r + f.emission.g + f.emission.b) * a;
     rho_area += f.rho * a;
@@ -41,10 +48,6 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
   }
   Resum();
 }
-
-namespace {
-double Abs(const glm::dvec3& u) { return std::abs(u.r) + std::abs(u.g) + std::abs(u.b); }
-}  // namespace
 
 void Solver::Resum() {
   unshot_sum_ = glm::dvec3(0.0);
@@ -60,8 +63,11 @@ glm::dvec3 Solver::Ambient() const {
   return reflect_ * unshot_sum_ / total_area_;
 }
 
+// A patch no light has reached yet (the floor under a box) is not
+// overshot: the ambient estimate is light expected to arrive, and there
+// it will not, so shooting it would only have to be taken back later.
 glm::dvec3 Solver::ToShoot(int p) const {
-  if (!overshoot_) return unshot_[p];
+  if (!overshoot_ || !lit_[p]) return unshot_[p];
   return unshot_[p] + mesh_.faces[mesh_.patches[p].face].rho * Ambient();
 }
 
@@ -70,9 +76,9 @@ int Solver::Select(const std::vector<char>* taken) const {
   int best = -1;
   double best_power = 0;
   for (size_t p = 0; p < unshot_.size(); ++p) {
-    if (taken && (*taken)[p]) continue;
+    if ((taken && (*taken)[p]) || blind_[p]) continue;
     const Patch& pa = mesh_.patches[p];
-    glm::dvec3 x = unshot_[p] + mesh_.faces[pa.face].rho * amb;
+    glm::dvec3 x = lit_[p] ? unshot_[p] + mesh_.faces[pa.face].rho * amb : unshot_[p];
     double power = Abs(x) * pa.area;
     if (power > best_power) {
       best_power = power;
@@ -84,7 +90,11 @@ int Solver::Select(const std::vector<char>* taken) const {
 
 void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   const Patch& shooter = mesh_.patches[p];
-  const glm::dvec3 x = ToShoot(p);
+  // A patch that sees no element sends its light out of the scene: its
+  // unshot radiosity is spent, and it is never chosen again (nothing can
+  // send it light either, by reciprocity).
+  if (column.empty()) blind_[p] = 1;
+  const glm::dvec3 x = column.empty() ? unshot_[p] : ToShoot(p);
   abs_sum_ -= Abs(unshot_[p]) * shooter.area;
   unshot_[p] -= x;
   abs_sum_ += Abs(unshot_[p]) * shooter.area;
@@ -105,11 +115,13 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   for (int32_t q : touched_) {
     const Patch& pq = mesh_.patches[q];
     const glm::dvec3 reflected = mesh_.faces[pq.face].rho * xa * fsum_[q];
+    fsum_[q] = 0;
+    lit_[q] |= Abs(reflected) > 0;
+    if (blind_[q]) continue;  // a hemicube speck: it could not pass it on
     abs_sum_ -= Abs(unshot_[q]) * pq.area;
     unshot_[q] += reflected / pq.area;
     abs_sum_ += Abs(unshot_[q]) * pq.area;
     unshot_sum_ += reflected;
-    fsum_[q] = 0;
   }
   touched_.clear();
   ++times_shot_[p];

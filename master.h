@@ -57,6 +57,8 @@ class Solver {
   std::vector<glm::dvec3> unshot_;  // per patch
   std::vector<double> fsum_;        // per patch: Σ F within one Shoot
   std::vector<int32_t> touched_;    // patches with fsum_ != 0
+  std::vector<uint8_t> lit_;        // per patch: emits, or light reached it
+  std::vector<uint8_t> blind_;      // per patch: its column was empty
   std::vector<int> times_shot_;
   glm::dvec3 unshot_sum_{0.0};      // Σ unshot·area, kept incrementally
   double abs_sum_ = 0;              // Σ |unshot|·area (channels summed), too

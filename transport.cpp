@@ -161,7 +161,8 @@ double InProcessTransport::Now() { return WallNow(); }
 
 WorkerPool::WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh,
                        const PoolOptions& opts)
-    : mesh_(mesh), mesh_hash_(proto::MeshHash(mesh)), opts_(opts),
+    : mesh_(mesh), base_elements_(mesh.elems.size()), mesh_hash_(proto::MeshHash(mesh)),
+      opts_(opts),
       epoch_(WallNow()) {
   proto::EncodeHello(proto::Hello(), &scene_frame_);
   proto::EncodeScene(setup, &scene_frame_);
@@ -177,6 +178,9 @@ void WorkerPool::Add(std::unique_ptr<Conn> conn, const std::string& name) {
   w.conn = std::move(conn);
   w.started = w.last_heard = w.last_sent = Now();
   w.out = scene_frame_;
+  // A worker that joins late (or replaces a lost one) gets the hierarchy
+  // as it is now: every edit so far, in order, right after the scene.
+  if (!edits_.empty()) proto::EncodeDivide(edits_, &w.out);
   workers_.push_back(std::move(w));
 }
 
@@ -193,6 +197,7 @@ void WorkerPool::Assign(int w, const proto::Assignment& a) {
 }
 
 void WorkerPool::Divide(const std::vector<int32_t>& elems) {
+  edits_.insert(edits_.end(), elems.begin(), elems.end());
   for (Worker& w : workers_)
     if (w.state != State::kLost) proto::EncodeDivide(elems, &w.out);
 }
@@ -263,9 +268,9 @@ bool WorkerPool::Handle(int w, proto::Msg type, const std::string& payload,
       proto::Ready r;
       if (type != Msg::kReady) break;
       if (!proto::DecodeReady(payload, &r, &err)) { *why = "garbled ready: " + err; return false; }
-      if (r.elements != mesh_.elems.size() || r.mesh_hash != mesh_hash_) {
+      if (r.elements != base_elements_ || r.mesh_hash != mesh_hash_) {
         *why = "built a different mesh (" + std::to_string(r.elements) + " elements, this has " +
-               std::to_string(mesh_.elems.size()) + ")";
+               std::to_string(base_elements_) + ")";
         return false;
       }
       wk.state = State::kJoined;

@@ -151,7 +151,8 @@ class WorkerPool : public Transport {
 
   const Mesh& mesh_;
   std::string scene_frame_;  // encoded once, sent to every worker
-  uint64_t mesh_hash_;
+  uint64_t base_elements_, mesh_hash_;  // of the mesh as BuildMesh made it
+  std::vector<int32_t> edits_;          // every Divide so far, in order
   PoolOptions opts_;
   std::vector<Worker> workers_;
   uint64_t sent_ = 0, received_ = 0;

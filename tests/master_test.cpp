@@ -99,6 +99,32 @@ TEST(Solver, SelectSkipsTakenPatches) {
   EXPECT_EQ(m.patches[second].face, 1);
 }
 
+// "No work on faces that see nothing": a lamp facing down on a floor,
+// with two squares above it facing up into the void. The dark one never
+// receives light, so it is never overshot or shot; the glowing one sees
+// nothing, so it shoots once (its light leaves the scene) and never again.
+TEST(Solver, FacesThatSeeNothingAreNotWorkedOn) {
+  Scene s = EmptyScene();
+  const glm::dvec3 white(0.8), black(0.0), glow(2.0), lamp(5.0);
+  AddFace(&s, {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}}, white, black);    // floor, up
+  AddFace(&s, {{0, 1, 0}, {1, 1, 0}, {1, 1, 1}, {0, 1, 1}}, black, lamp);     // lamp, down
+  AddFace(&s, {{0, 2, 0}, {0, 2, 1}, {1, 2, 1}, {1, 2, 0}}, white, black);    // dark, up
+  AddFace(&s, {{0, 3, 0}, {0, 3, 1}, {1, 3, 1}, {1, 3, 0}}, white, glow);     // glowing, up
+  MeshOptions one;
+  one.patch_size = 2.0;  // a patch per face
+  Mesh m = MakeMesh(s, one);
+  ASSERT_EQ(m.patches.size(), 4u);
+  Solver solver(m, true);
+  RunResult r = Solve(m, &solver, 1e-6);
+  ASSERT_EQ(r.status, RunStatus::kConverged) << r.why;
+  EXPECT_EQ(solver.TimesShot(2), 0);
+  EXPECT_EQ(solver.TimesShot(3), 1);
+  const auto b = FaceRadiosity(m, solver.radiosity());
+  EXPECT_EQ(b[2], black);
+  EXPECT_EQ(b[3], glow);
+  EXPECT_GT(b[0].r, 0.5);  // the floor is lit by the lamp
+}
+
 TEST(Solver, DarkSceneConvergesToBlack) {
   Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(0.0)});
   Mesh m = MakeMesh(s);
