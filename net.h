@@ -83,15 +83,29 @@ void EncodeHello(const Hello& m, std::string* out);
 void EncodeScene(const SceneSetup& m, std::string* out);
 void EncodeReady(const Ready& m, std::string* out);
 void EncodeWork(const std::vector<Assignment>& m, std::string* out);
-// Element ids are delta-coded varints; form factors are floats rounded to
-// 24 bits (sign dropped: f > 0), relative error <= 2^-17 (kFormFactorError).
+// Element ids are sent as runs of consecutive ids; form factors as 16-bit
+// codes with 12 significant bits (rounding error 2^-12, kFormFactorRounding)
+// and error diffusion (the rounding residual carried on, largest exponents
+// first), so that each decoded form factor is within kFormFactorError
+// (2^-10) of its own, and the decoded column sum within kColumnSumError
+// (one code step, 2^-11) of the largest form factor of the true sum, in
+// practice far closer. Values outside the 16-bit codes (below 2^-31, or 2
+// and more) are escaped to a 24-bit code (relative error 2^-17).
 void EncodeColumn(const Column& m, std::string* out);
 void EncodeDivide(const std::vector<int32_t>& elems, std::string* out);
 void EncodeHeartbeat(std::string* out);
 void EncodeError(const std::string& text, std::string* out);
 void EncodeBye(std::string* out);
 
-constexpr double kFormFactorError = 1.0 / (1 << 17);
+// Column coding bounds (doc/protocol.txt, "column"). Per form factor F
+// and its decoded F': |F' - F| <= kFormFactorError F. Per column:
+// |sum F' - sum F| <= kColumnSumError (1 + kFormFactorError) max F, plus
+// 2^-17 F for each F below 2^-31 (escaped) and the rounding of the sums
+// themselves. kFormFactorRounding is the rounding of one 16-bit code (half
+// its step): the scale of a form factor's typical error.
+constexpr double kFormFactorError = 1.0 / (1 << 10);
+constexpr double kFormFactorRounding = 1.0 / (1 << 12);
+constexpr double kColumnSumError = 1.0 / (1 << 11);
 
 // Payload decoders: the payload of one frame of the matching type. False
 // with *err (one line, no prefix) when it does not decode exactly.
@@ -100,6 +114,8 @@ bool DecodeScene(const std::string& payload, SceneSetup* m, std::string* err);
 bool DecodeReady(const std::string& payload, Ready* m, std::string* err);
 bool DecodeWork(const std::string& payload, std::vector<Assignment>* m, std::string* err);
 bool DecodeColumn(const std::string& payload, Column* m, std::string* err);
+// The same on bytes that are not in a string (no copy needed).
+bool DecodeColumn(const char* payload, size_t size, Column* m, std::string* err);
 bool DecodeDivide(const std::string& payload, std::vector<int32_t>* m, std::string* err);
 bool DecodeError(const std::string& payload, std::string* text, std::string* err);
 
