@@ -4,27 +4,35 @@ CXX      ?= g++
 PREFIX   ?= /usr/local
 DESTDIR  ?=
 PKGS     := glm stb
-CXXFLAGS ?= -O2 -g
-CXXFLAGS += -std=c++17 -Wall -Wextra -MMD -MP
+OPTFLAGS ?= -O2 -g
+CXXFLAGS += $(OPTFLAGS) -std=c++17 -Wall -Wextra -MMD -MP
 CPPFLAGS += $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
 LDLIBS   += $(shell pkg-config --libs $(PKGS) 2>/dev/null) -lpthread
-B        := build
+B        ?= build
+PROG     ?= radiosity
+NPROC    := $(shell nproc 2>/dev/null || echo 1)
+# The sanitizer build (make check runs it too): the same sources under
+# AddressSanitizer and UndefinedBehaviorSanitizer, any report fatal.
+SAN      := -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp master.cpp results.cpp image.cpp net.cpp transport.cpp worker.cpp
+LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp master.cpp results.cpp image.cpp net.cpp transport.cpp worker.cpp sim.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)
 LIB_OBJS  := $(LIB_SRCS:%.cpp=$(B)/%.o)
 TEST_OBJS := $(TEST_SRCS:tests/%.cpp=$(B)/tests/%.o)
 
-all: radiosity
+all: $(PROG)
 
-radiosity: $(B)/radiosity.o $(LIB_OBJS)
+$(PROG): $(B)/radiosity.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 $(B)/unit_tests: $(TEST_OBJS) $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS) $(shell pkg-config --libs gtest_main)
 
 $(B)/radiosity-bench: $(B)/bench/bench.o $(LIB_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(B)/radiosity-parallel: $(B)/bench/parallel.o $(B)/bench/svg.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 $(B)/bench/%.o: bench/%.cpp | $(B)
@@ -46,8 +54,13 @@ deps:
 	@sh tests/deps.sh
 
 check: deps
-	@$(MAKE) --no-print-directory radiosity $(B)/unit_tests
+	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/unit_tests
+	@$(MAKE) --no-print-directory -j$(NPROC) asan
 	@sh tests/run.sh
+
+asan:
+	@$(MAKE) --no-print-directory B=build/asan PROG=build/asan/radiosity OPTFLAGS="$(SAN)" \
+	  LDFLAGS="$(SAN)" build/asan/radiosity build/asan/unit_tests
 
 demo: deps
 	@$(MAKE) --no-print-directory radiosity
@@ -55,7 +68,7 @@ demo: deps
 	@echo "pictures and results: $(CURDIR)/out/cornell (final.png, result.csv, log.csv, result.ply)"
 
 bench: deps
-	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench
+	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-parallel
 	@sh bench/run.sh
 
 install: radiosity
@@ -66,6 +79,6 @@ install: radiosity
 clean:
 	rm -rf $(B) radiosity out
 
-.PHONY: all deps check demo bench install clean
+.PHONY: all deps check asan demo bench install clean
 
 -include $(wildcard $(B)/*.d $(B)/tests/*.d $(B)/bench/*.d)

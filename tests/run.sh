@@ -1,41 +1,85 @@
 #!/bin/sh
 # Runs every test: the unit tests (gtest), each end-to-end tests/*.sh on the
-# real binary, and the man page lint. A shell test passes with exit 0, is
-# skipped with 77 and fails otherwise. Ends with "N passed, N failed".
+# real binary, and the man page lint; then the unit tests and a reduced set
+# of end-to-end tests again on the AddressSanitizer + UndefinedBehavior-
+# Sanitizer build in build/asan (any report fails the test). A shell test
+# passes with exit 0, is skipped with 77 and fails otherwise. Ends with
+# "N passed, N failed, N skipped".
 cd "$(dirname "$0")/.." || exit 1
-RADIOSITY="$(pwd)/radiosity"
-export RADIOSITY
 passed=0 failed=0 skipped=0
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 
-echo "== unit tests"
-./build/unit_tests --gtest_brief=1 >"$log" 2>&1
-cat "$log"
-p=$(sed -n 's/^\[  PASSED  \] \([0-9]*\) test.*/\1/p' "$log")
-f=$(sed -n 's/^\[  FAILED  \] \([0-9]*\) test.*/\1/p' "$log")
-[ -n "$p" ] || { p=0; f=${f:-1}; echo "FAIL: unit tests did not finish"; }
-passed=$((passed + p)) failed=$((failed + ${f:-0}))
+# The sanitizer pass runs the end-to-end tests that reach the most code
+# per second (the loader's error paths, the command line and its local
+# workers, the analytic cases); the long convergence runs and the fault
+# tests stay in the normal pass. A report in a worker only ends that
+# worker (the master goes on without it), so the output is searched for
+# reports too.
+SAN_TESTS="tests/scene_input.sh tests/cli.sh tests/formfactor.sh"
 
+# unit LABEL BINARY
+unit() {
+  echo "== unit tests ($1)"
+  "$2" --gtest_brief=1 >"$log" 2>&1
+  cat "$log"
+  p=$(sed -n 's/^\[  PASSED  \] \([0-9]*\) test.*/\1/p' "$log")
+  f=$(sed -n 's/^\[  FAILED  \] \([0-9]*\) test.*/\1/p' "$log")
+  [ -n "$p" ] || { p=0; f=${f:-1}; echo "FAIL: unit tests ($1) did not finish"; }
+  passed=$((passed + p)) failed=$((failed + ${f:-0}))
+}
+
+# shell LABEL TESTS...: with $RADIOSITY set
+shell() {
+  label=$1; shift
+  for t in "$@"; do
+    echo "== $t ($label)"
+    start=$(date +%s)
+    bash "$t" >"$log" 2>&1
+    rc=$?
+    cat "$log"
+    if [ "$label" = asan ] && grep -q 'ERROR: AddressSanitizer\|ERROR: LeakSanitizer\|runtime error:' "$log"; then
+      echo "FAIL: a sanitizer report in $t"; rc=1
+    fi
+    secs=$(( $(date +%s) - start ))
+    case $rc in
+      0) passed=$((passed + 1)); echo "-- passed: $t ($label, ${secs} s)" ;;
+      77) skipped=$((skipped + 1)); echo "-- skipped: $t ($label)" ;;
+      *) failed=$((failed + 1)); echo "-- FAILED: $t ($label, exit $rc)" ;;
+    esac
+  done
+}
+
+all_shell=""
 for t in tests/*.sh; do
   case "$t" in tests/run.sh|tests/deps.sh|tests/lib.sh) continue ;; esac
-  echo "== $t"
-  start=$(date +%s)
-  bash "$t"
-  rc=$?
-  secs=$(( $(date +%s) - start ))
-  case $rc in
-    0) passed=$((passed + 1)); echo "-- passed: $t (${secs} s)" ;;
-    77) skipped=$((skipped + 1)); echo "-- skipped: $t" ;;
-    *) failed=$((failed + 1)); echo "-- FAILED: $t (exit $rc)" ;;
-  esac
+  all_shell="$all_shell $t"
 done
+
+RADIOSITY="$(pwd)/radiosity"
+export RADIOSITY
+unit build ./build/unit_tests
+# shellcheck disable=SC2086 # a list of paths without spaces
+shell build $all_shell
 
 echo "== man page lint"
 if out=$(groff -man -ww -z man/radiosity.1 2>&1) && [ -z "$out" ]; then
   passed=$((passed + 1))
 else
   failed=$((failed + 1)); echo "FAIL: groff -man -ww -z man/radiosity.1"; echo "$out"
+fi
+
+if [ -x build/asan/radiosity ] && [ -x build/asan/unit_tests ]; then
+  RADIOSITY="$(pwd)/build/asan/radiosity"
+  # Leaks are reported too; abort on the first report of any kind.
+  ASAN_OPTIONS=abort_on_error=1:detect_leaks=1
+  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+  export RADIOSITY ASAN_OPTIONS UBSAN_OPTIONS
+  unit asan ./build/asan/unit_tests
+  # shellcheck disable=SC2086
+  shell asan $SAN_TESTS
+else
+  skipped=$((skipped + 1)); echo "-- skipped: the sanitizer pass (no build/asan; run make asan)"
 fi
 
 echo "$passed passed, $failed failed, $skipped skipped"

@@ -1,0 +1,257 @@
+#include "sim.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "check.h"
+#include "master.h"
+
+SimTransport::SimTransport(const Mesh& mesh, const SimOptions& opts)
+    : mesh_(mesh), opts_(opts), hemicube_(opts.resolution), workers_(opts.workers),
+      mark_(ThreadCpuSeconds()) {
+  CHECK(opts_.workers >= 1 && opts_.host_cores >= 0 && opts_.latency_s >= 0);
+  std::string frame;
+  proto::EncodeHello(proto::Hello(), &frame);
+  proto::EncodeReady({mesh.elems.size(), 0}, &frame);
+  ready_bytes_ = frame.size();
+  for (size_t w = 0; w < workers_.size(); ++w) {
+    if (w < opts_.speed_factor.size()) workers_[w].factor = opts_.speed_factor[w];
+    CHECK(workers_[w].factor > 0);
+    if (opts_.scene_bytes > 0) {
+      sent_ += opts_.scene_bytes;
+      Schedule(0, {Event::kSend, int(w), opts_.scene_bytes, Event::kScene});
+    } else {
+      Schedule(opts_.startup_s, {Event::kJoin, int(w)});
+    }
+  }
+  for (const SimOptions::Slowdown& s : opts_.slowdowns) {
+    CHECK(s.factor > 0 && s.from <= s.to && s.worker < opts_.workers);
+    Schedule(s.from, {Event::kRate, s.worker});
+    if (std::isfinite(s.to)) Schedule(s.to, {Event::kRate, s.worker});
+  }
+  for (const SimOptions::Fluctuation& f : opts_.bandwidth_changes)
+    CHECK(f.from <= f.to && f.factor >= 0 && (f.factor > 0 || std::isfinite(f.to)));
+  for (const SimOptions::Crash& c : opts_.crashes) {
+    CHECK(c.worker >= 0 && c.worker < opts_.workers);
+    Schedule(c.at, {Event::kCrash, c.worker});
+  }
+}
+
+int SimTransport::Starting() const {
+  int n = 0;
+  for (const Worker& w : workers_) n += !w.joined && !w.lost;
+  return n;
+}
+
+double SimTransport::Now() {
+  if (opts_.master_cost_s >= 0) return now_;
+  return now_ + ThreadCpuSeconds() - mark_;
+}
+
+void SimTransport::Schedule(double t, Event ev) {
+  events_.emplace(std::make_pair(t, seq_++), std::move(ev));
+}
+
+// The frame goes out at the master's present moment, which runs ahead of
+// now_ by the CPU it has used since Poll; it enters the medium when the
+// clock gets there, in order with the workers' frames.
+void SimTransport::Assign(int w, const proto::Assignment& a) {
+  std::string frame;
+  proto::EncodeWork({a}, &frame);
+  sent_ += frame.size();
+  Event ev{Event::kSend, w, frame.size(), Event::kWork};
+  ev.a = a;
+  Schedule(Now(), ev);
+}
+
+void SimTransport::Divide(const std::vector<int32_t>& elems) {
+  std::string frame;
+  proto::EncodeDivide(elems, &frame);
+  const double t = Now();
+  for (size_t w = 0; w < workers_.size(); ++w) {
+    if (workers_[w].lost) continue;
+    sent_ += frame.size();
+    Schedule(t, {Event::kSend, int(w), frame.size(), Event::kEdit});
+  }
+}
+
+double SimTransport::Transmit(size_t bytes) {
+  double end = std::max(now_, medium_free_);
+  if (opts_.bandwidth_bps > 0) {
+    double bits = 8.0 * double(bytes);
+    for (;;) {  // through the bandwidth's changes, piece by piece
+      double bw = opts_.bandwidth_bps, next = HUGE_VAL;
+      for (const SimOptions::Fluctuation& f : opts_.bandwidth_changes) {
+        if (f.from <= end && end < f.to) {
+          bw *= f.factor;
+          next = std::min(next, f.to);
+        } else if (f.from > end) {
+          next = std::min(next, f.from);
+        }
+      }
+      if (bw > 0 && bits <= bw * (next - end)) {
+        end += bits / bw;
+        break;
+      }
+      bits -= bw * (next - end);
+      end = next;
+    }
+  }
+  medium_free_ = end;
+  return end + opts_.latency_s;
+}
+
+double SimTransport::Speed(int w) const {
+  double s = 1 / workers_[w].factor;
+  for (const SimOptions::Slowdown& d : opts_.slowdowns)
+    if ((d.worker == w || d.worker < 0) && d.from <= now_ && now_ < d.to) s /= d.factor;
+  return s;
+}
+
+// A worker takes its next assignment: the column is computed now, for
+// real, and what that cost is the work the worker has to get through.
+void SimTransport::Start(int w) {
+  Worker& wk = workers_[w];
+  if (wk.crashed || wk.busy || wk.todo.empty()) return;
+  const proto::Assignment a = wk.todo.front().first;
+  scratch_.patch = a.patch;
+  scratch_.k = a.k;
+  scratch_.wait_s = now_ - wk.todo.front().second;
+  wk.todo.pop_front();
+  const bool fixed = opts_.column_cost_s >= 0;
+  const double t0 = ThreadCpuSeconds();
+  hemicube_.Column(mesh_, a.patch, opts_.rotate ? ShotAngle(opts_.seed, a.patch, a.k) : 0.0,
+                   &scratch_.ff);
+  scratch_.compute_s = (fixed ? opts_.column_cost_s : ThreadCpuSeconds() - t0) * wk.factor;
+  wk.frame.clear();
+  proto::EncodeColumn(scratch_, &wk.frame);
+  wk.left = fixed ? opts_.column_cost_s : ThreadCpuSeconds() - t0;
+  wk.busy = true;
+}
+
+void SimTransport::Finish(int w) {
+  Worker& wk = workers_[w];
+  wk.busy = false;
+  wk.last_arrival = Transmit(wk.frame.size());
+  Event ev{Event::kColumn, w, wk.frame.size()};
+  ev.frame = std::move(wk.frame);
+  Schedule(wk.last_arrival, std::move(ev));
+  Start(w);
+}
+
+void SimTransport::Process(Event& ev) {
+  if (ev.kind == Event::kRate) return;  // splits the time step: Advance recomputes speeds
+  if (ev.kind == Event::kSend) {
+    const double at = Transmit(ev.bytes);
+    Event arrival{ev.then, ev.worker};
+    arrival.a = ev.a;
+    Schedule(at, arrival);
+    return;
+  }
+  Worker& wk = workers_[ev.worker];
+  if (wk.crashed && ev.kind != Event::kColumn && ev.kind != Event::kLost)
+    return;  // into the void
+  switch (ev.kind) {
+    case Event::kWork:
+      wk.todo.emplace_back(ev.a, now_);
+      Start(ev.worker);
+      return;
+    case Event::kScene:
+      Schedule(now_ + opts_.startup_s, {Event::kReady, ev.worker});
+      return;
+    case Event::kReady:
+      wk.last_arrival = Transmit(ready_bytes_);
+      Schedule(wk.last_arrival, {Event::kJoin, ev.worker, ready_bytes_});
+      return;
+    case Event::kCrash:
+      wk.crashed = true;
+      wk.busy = false;
+      wk.todo.clear();
+      // Noticed like a closed connection: after what it had already sent.
+      Schedule(std::max(now_ + opts_.latency_s, wk.last_arrival), {Event::kLost, ev.worker});
+      return;
+    case Event::kJoin:
+    case Event::kColumn:
+    case Event::kLost:
+      inbox_.push_back(std::move(ev));
+      return;
+    default:  // kEdit: the workers share the master's mesh
+      return;
+  }
+}
+
+void SimTransport::Advance(double* master_cpu, double until, bool stop_on_arrival) {
+  std::vector<double> done(workers_.size());
+  for (;;) {
+    if (master_cpu ? *master_cpu <= 0 : now_ >= until) return;
+    if (stop_on_arrival && !inbox_.empty()) return;
+    // Speeds are constant until the next event, completion or the end.
+    int busy = master_cpu != nullptr;
+    for (const Worker& w : workers_) busy += w.busy;
+    const double share =
+        opts_.host_cores > 0 && busy > opts_.host_cores ? double(opts_.host_cores) / busy : 1.0;
+    double t = master_cpu ? HUGE_VAL : until;
+    if (!events_.empty()) t = std::min(t, events_.begin()->first.first);
+    const double master_done = master_cpu ? now_ + *master_cpu / share : HUGE_VAL;
+    t = std::min(t, master_done);
+    for (size_t w = 0; w < workers_.size(); ++w) {
+      if (!workers_[w].busy) continue;
+      done[w] = now_ + workers_[w].left / (share * Speed(int(w)));
+      t = std::min(t, done[w]);
+    }
+    // Whoever ends at t ends exactly there (no rounding leftovers).
+    for (size_t w = 0; w < workers_.size(); ++w) {
+      Worker& wk = workers_[w];
+      if (!wk.busy) continue;
+      wk.left = done[w] <= t ? 0 : wk.left - (t - now_) * share * Speed(int(w));
+    }
+    if (master_cpu) *master_cpu = master_done <= t ? 0 : *master_cpu - (t - now_) * share;
+    now_ = t;
+    for (size_t w = 0; w < workers_.size(); ++w)
+      if (workers_[w].busy && workers_[w].left == 0) Finish(int(w));
+    while (!events_.empty() && events_.begin()->first.first <= now_) {
+      Event ev = std::move(events_.begin()->second);
+      events_.erase(events_.begin());
+      Process(ev);
+    }
+  }
+}
+
+void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
+  // The master has worked since the last Poll: the world moves on meanwhile.
+  double cpu = opts_.master_cost_s >= 0 ? opts_.master_cost_s : ThreadCpuSeconds() - mark_;
+  master_s_ += cpu;
+  Advance(&cpu, 0, false);
+  if (inbox_.empty()) Advance(nullptr, now_ + timeout, true);
+  // From here on it is the master's work again: decoding what arrived.
+  mark_ = ThreadCpuSeconds();
+  for (Event& ev : inbox_) {
+    Worker& wk = workers_[ev.worker];
+    switch (ev.kind) {
+      case Event::kJoin:
+        received_ += ev.bytes;
+        wk.joined = true;
+        events->push_back({WorkerEvent::kJoined, ev.worker, {}, ""});
+        break;
+      case Event::kLost:
+        wk.lost = true;
+        events->push_back({WorkerEvent::kLost, ev.worker, {}, "crashed (simulated)"});
+        break;
+      case Event::kColumn: {
+        received_ += ev.bytes;
+        ++wk.columns;
+        reader_.Append(ev.frame.data(), ev.frame.size());
+        proto::Msg type;
+        std::string payload, err;
+        CHECK(reader_.Next(&type, &payload, &err) == proto::FrameReader::kFrame);
+        WorkerEvent out{WorkerEvent::kColumn, ev.worker, {}, ""};
+        CHECK(type == proto::Msg::kColumn && proto::DecodeColumn(payload, &out.column, &err));
+        events->push_back(std::move(out));
+        break;
+      }
+      default:
+        CHECK(false);
+    }
+  }
+  inbox_.clear();
+}

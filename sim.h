@@ -1,0 +1,163 @@
+// The cluster simulation (paper §5.2 beyond the machines at hand): the real
+// scheduler (RunMaster, unchanged) drives simulated workers through the
+// Transport interface on a virtual clock.
+//
+// What is real: every column is computed by Hemicube::Column on the master's
+// mesh and sent as the bytes proto::EncodeColumn makes, and the master
+// decodes it, so the shooting order, overshooting and RMS error are those of
+// a real run. What is modelled: time.
+//  * A worker is charged the measured CPU time of its column (the hemicube
+//    and the encoding, the work a worker process does per column) times its
+//    speed factor, and times any slowdown active while it computes.
+//  * The master is charged its own measured CPU time: everything its thread
+//    does between the return of one Poll() and the start of the next, plus
+//    the decoding of the columns Poll() hands it. Now() includes what is
+//    used so far, so the master's notion of time runs on while it works.
+//  * The master's link is one shared medium that all frames, both ways,
+//    cross one after another (FIFO by the time they are sent): a frame of
+//    B bytes holds it 8B / bandwidth seconds, then arrives `latency` later.
+//  * host_cores > 0 puts the master and every worker on one machine of that
+//    many cores (processor sharing: n busy on c < n cores run at c/n speed),
+//    to compare with real runs on this machine; 0 gives each its own.
+// Events reach the master in time order: a worker joins at startup_s (or,
+// with scene_bytes, once its scene has crossed the medium, startup_s has
+// passed and its ready frame is back), its columns arrive, and a crashed
+// worker is reported lost `latency` after the crash (after its frames
+// already on the wire); its queued work vanishes.
+// With fixed costs (column_cost_s, master_cost_s >= 0) a run is fully
+// deterministic; with measured ones only the times vary.
+#ifndef RADIOSITY_SIM_H
+#define RADIOSITY_SIM_H
+
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "hemicube.h"
+#include "mesh.h"
+#include "net.h"
+#include "transport.h"
+
+struct SimOptions {
+  int workers = 1;
+  // Per worker (missing entries: 1): its CPU time per column is the
+  // measured one times this, so 2 is a worker half as fast.
+  std::vector<double> speed_factor;
+  // A worker (or every worker: -1) slowed by `factor` during [from, to).
+  struct Slowdown {
+    int worker;
+    double from, to, factor;
+  };
+  std::vector<Slowdown> slowdowns;
+  double latency_s = 100e-6;  // per frame, after it has left the medium
+  double bandwidth_bps = 1e9; // bits/s; <= 0: unlimited
+  // The link's bandwidth times `factor` during [from, to).
+  struct Fluctuation {
+    double from, to, factor;
+  };
+  std::vector<Fluctuation> bandwidth_changes;
+  struct Crash {
+    int worker;
+    double at;
+  };
+  std::vector<Crash> crashes;
+  double startup_s = 0;       // process start and mesh build
+  // > 0: the master first sends each worker this many bytes (hello and
+  // scene), at t = 0 in worker order, and each answers with a hello and a
+  // ready frame; 0: no start-up traffic, every worker joins at startup_s.
+  size_t scene_bytes = 0;
+  int host_cores = 0;         // > 0: everyone shares one machine of this many cores
+  // >= 0: charge this instead of the measurements (tests): seconds per
+  // column, and seconds of master work per Poll() cycle.
+  double column_cost_s = -1;
+  double master_cost_s = -1;
+  // The columns' parameters, as RunOptions has them.
+  int resolution = 256;
+  bool rotate = true;
+  unsigned seed = 1;
+};
+
+class SimTransport : public Transport {
+ public:
+  SimTransport(const Mesh& mesh, const SimOptions& opts);
+  int Workers() const override { return opts_.workers; }
+  int Starting() const override;
+  std::string Name(int w) const override { return "simulated worker " + std::to_string(w); }
+  void Assign(int w, const proto::Assignment& a) override;
+  void Divide(const std::vector<int32_t>& elems) override;
+  void Poll(double timeout, std::vector<WorkerEvent>* events) override;
+  double Now() override;
+  uint64_t BytesSent() const override { return sent_; }
+  uint64_t BytesReceived() const override { return received_; }
+
+  long Columns(int w) const { return workers_[w].columns; }  // delivered to the master
+  double MasterSeconds() const { return master_s_; }  // charged to the master so far
+
+ private:
+  struct Event {
+    enum Kind {
+      kSend,    // a frame of the master's enters the medium
+      kWork,    // an assignment reaches its worker
+      kEdit,    // a hierarchy edit reaches its worker (it shares the mesh)
+      kScene,   // the scene reaches its worker: it starts up
+      kReady,   // a worker has built its mesh and says so
+      kJoin,    // the master learns that a worker has joined
+      kColumn,  // a column frame reaches the master
+      kCrash,   // a worker dies
+      kLost,    // the master learns of it
+      kRate,    // a slowdown begins or ends: speeds change
+    } kind;
+    int worker;
+    size_t bytes = 0;     // of the frame, for the medium and the counts
+    Kind then = kSend;    // kSend: what its arrival is (kWork, kEdit, kScene)
+    proto::Assignment a{};  // kSend, kWork
+    std::string frame{};    // kColumn
+  };
+  struct Worker {
+    bool joined = false, lost = false;  // as the master was told
+    bool crashed = false;
+    std::deque<std::pair<proto::Assignment, double>> todo;  // arrived, and when
+    bool busy = false;
+    double left = 0;          // CPU seconds at full speed still to do on the column
+    std::string frame;        // that column, encoded
+    double factor = 1;
+    double last_arrival = 0;  // of its frames at the master
+    long columns = 0;
+  };
+
+  void Schedule(double t, Event ev);
+  // Puts `bytes` on the medium at now_; returns when they arrive.
+  double Transmit(size_t bytes);
+  double Speed(int w) const;  // column CPU seconds per second, alone on a core
+  // Runs the world forward: while the master works `*master_cpu` seconds
+  // (master_cpu non-null), else until `until` or, with stop_on_arrival,
+  // the first frame at the master.
+  void Advance(double* master_cpu, double until, bool stop_on_arrival);
+  void Process(Event& ev);
+  void Start(int w);
+  void Finish(int w);
+
+  const Mesh& mesh_;
+  SimOptions opts_;
+  // One for all workers: a column does not depend on whose hemicube made
+  // it, and one stays warm in the cache as a worker process's would, where
+  // a hundred taking turns would be charged cache misses no worker has.
+  Hemicube hemicube_;
+  proto::Column scratch_;
+  std::vector<Worker> workers_;
+  std::map<std::pair<double, long>, Event> events_;  // by time, then order made
+  long seq_ = 0;
+  std::deque<Event> inbox_;  // reached the master, not yet polled
+  double now_ = 0;
+  double medium_free_ = 0;  // when the link is next idle
+  double mark_;             // master thread CPU time at the last charge
+  proto::FrameReader reader_;
+  size_t ready_bytes_;       // a worker's hello and ready frames
+  uint64_t sent_ = 0, received_ = 0;
+  double master_s_ = 0;
+};
+
+#endif

@@ -1,0 +1,302 @@
+// The cluster simulation's bookkeeping, with fixed charged costs so that
+// virtual times are exact: who computes what, when it arrives, what the
+// wire carries. (How well measured costs predict real runs is the
+// benchmark's business: bench/parallel.cpp.)
+#include <gtest/gtest.h>
+
+#include "master.h"
+#include "results.h"
+#include "sim.h"
+#include "test_util.h"
+
+namespace {
+
+constexpr double kCost = 0.01;  // seconds per column
+
+// A closed box lit by its floor: about 600 patches, cheap columns at R 32.
+Mesh BoxMesh() {
+  const glm::dvec3 dark(0.0);
+  return MakeMesh(Box(1.0, {glm::dvec3(0.7)}, {glm::dvec3(1.0), dark, dark, dark, dark, dark}));
+}
+
+SimOptions Fixed(int workers) {
+  SimOptions o;
+  o.workers = workers;
+  o.column_cost_s = kCost;
+  o.master_cost_s = 0;
+  o.latency_s = 0;
+  o.bandwidth_bps = 0;
+  o.resolution = 32;
+  o.rotate = false;
+  return o;
+}
+
+RunOptions Shots(long n) {
+  RunOptions o;
+  o.resolution = 32;
+  o.rotate = false;
+  o.epsilon = 1e-12;
+  o.max_shots = n;
+  return o;
+}
+
+RunResult Simulate(const Mesh& m, const RunOptions& o, Transport* t, Solver* solver = nullptr) {
+  Solver own(m, o.overshoot);
+  return RunMaster(m, o, solver ? solver : &own, t, nullptr, nullptr);
+}
+
+// Adds up the frames the master sends and receives, encoded again here.
+class Counting : public Transport {
+ public:
+  explicit Counting(Transport* t) : t_(t) {}
+  int Workers() const override { return t_->Workers(); }
+  int Starting() const override { return t_->Starting(); }
+  std::string Name(int w) const override { return t_->Name(w); }
+  void Assign(int w, const proto::Assignment& a) override {
+    std::string f;
+    proto::EncodeWork({a}, &f);
+    sent_ += f.size();
+    t_->Assign(w, a);
+  }
+  void Divide(const std::vector<int32_t>& e) override { t_->Divide(e); }
+  void Poll(double timeout, std::vector<WorkerEvent>* events) override {
+    const size_t before = events->size();
+    t_->Poll(timeout, events);
+    for (size_t i = before; i < events->size(); ++i) {
+      if ((*events)[i].kind != WorkerEvent::kColumn) continue;
+      std::string f;
+      proto::EncodeColumn((*events)[i].column, &f);
+      received_ += f.size();
+    }
+  }
+  double Now() override { return t_->Now(); }
+  uint64_t BytesSent() const override { return t_->BytesSent(); }
+  uint64_t BytesReceived() const override { return t_->BytesReceived(); }
+
+  Transport* t_;
+  uint64_t sent_ = 0, received_ = 0;
+};
+
+TEST(Sim, OneWorkerTakesShotsTimesCost) {
+  Mesh m = BoxMesh();
+  SimTransport t(m, Fixed(1));
+  RunResult r = Simulate(m, Shots(100), &t);
+  EXPECT_EQ(r.shots, 100);
+  EXPECT_NEAR(r.seconds, 100 * kCost, 1e-9);
+  EXPECT_EQ(r.joined, 1);
+}
+
+TEST(Sim, TwoWorkersHalveIt) {
+  Mesh m = BoxMesh();
+  SimTransport t(m, Fixed(2));
+  RunResult r = Simulate(m, Shots(100), &t);
+  EXPECT_NEAR(r.seconds, 50 * kCost, 1e-9);
+  EXPECT_EQ(t.Columns(0), t.Columns(1));
+}
+
+// Start-up traffic: each worker's scene crosses the medium (in worker
+// order), then its hello and ready frames come back behind them.
+TEST(Sim, ScenesGoOutFirst) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(3);
+  o.bandwidth_bps = 1e8;
+  o.scene_bytes = 1000000;  // 0.08 s each
+  SimTransport sim(m, o);
+  Counting t(&sim);
+  RunResult r = Simulate(m, Shots(30), &t);
+  EXPECT_EQ(r.joined, 3);
+  std::string ready;
+  proto::EncodeHello(proto::Hello(), &ready);
+  proto::EncodeReady({m.elems.size(), 0}, &ready);
+  EXPECT_EQ(r.bytes_sent, t.sent_ + 3 * o.scene_bytes);
+  EXPECT_EQ(r.bytes_received, t.received_ + 3 * ready.size());
+  const double setup = 8.0 * double(3 * o.scene_bytes + ready.size()) / o.bandwidth_bps;
+  EXPECT_GE(r.seconds, setup + 10 * kCost);  // 10 columns per worker, after the joins
+  EXPECT_LT(r.seconds, setup + 11 * kCost);
+}
+
+TEST(Sim, WorkersJoinAfterStartup) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(1);
+  o.startup_s = 0.5;
+  SimTransport t(m, o);
+  RunResult r = Simulate(m, Shots(10), &t);
+  EXPECT_NEAR(r.seconds, 0.5 + 10 * kCost, 1e-9);
+}
+
+// One patch at a time (queue 1): every shot waits for a round trip.
+TEST(Sim, LatencyIsPaidPerRoundTripWithoutAQueue) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(1);
+  o.latency_s = 0.002;
+  SimTransport t(m, o);
+  RunOptions ro = Shots(20);
+  ro.queue = 1;
+  RunResult r = Simulate(m, ro, &t);
+  EXPECT_NEAR(r.seconds, 20 * (kCost + 2 * o.latency_s), 1e-9);  // joined at 0
+}
+
+TEST(Sim, BytesAreTheEncodedFrames) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(3);
+  o.latency_s = 1e-4;
+  o.bandwidth_bps = 1e8;
+  SimTransport sim(m, o);
+  Counting t(&sim);
+  RunResult r = Simulate(m, Shots(200), &t);
+  EXPECT_EQ(r.bytes_sent, t.sent_);
+  EXPECT_EQ(r.bytes_received, t.received_);
+  EXPECT_GT(r.bytes_received, 200u * 100);  // columns of some size went by
+}
+
+// Free columns and a free master: the link is busy all the time, so the
+// run lasts as long as its bytes take to cross it.
+TEST(Sim, ANetworkBoundRunLastsBytesOverBandwidth) {
+  Mesh m = BoxMesh();
+  for (int workers : {1, 4}) {
+    SimOptions o = Fixed(workers);
+    o.column_cost_s = 0;
+    o.bandwidth_bps = 1e6;
+    SimTransport t(m, o);
+    RunResult r = Simulate(m, Shots(300), &t);
+    const double wire = 8.0 * double(r.bytes_sent + r.bytes_received) / o.bandwidth_bps;
+    EXPECT_NEAR(r.seconds, wire, 0.02 * wire) << workers << " workers";
+  }
+}
+
+// Half the bandwidth for a while: what it would have sent then takes
+// twice as long.
+TEST(Sim, BandwidthDropsForAWhile) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(1);
+  o.column_cost_s = 0;
+  o.bandwidth_bps = 1e6;
+  SimTransport steady(m, o);
+  const double t0 = Simulate(m, Shots(300), &steady).seconds;
+  o.bandwidth_changes = {{0.2 * t0, 0.4 * t0, 0.5}};
+  SimTransport dropped(m, o);
+  const double t1 = Simulate(m, Shots(300), &dropped).seconds;
+  EXPECT_NEAR(t1, t0 + 0.1 * t0, 0.01 * t0);
+}
+
+TEST(Sim, TheMasterIsChargedItsWork) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(8);
+  o.master_cost_s = 0.5 * kCost;  // per Poll: the master is the bottleneck
+  SimTransport t(m, o);
+  RunResult r = Simulate(m, Shots(200), &t);
+  // One Poll per shot once columns queue up at the master, which is then
+  // busy all the time.
+  EXPECT_NEAR(r.seconds, 200 * o.master_cost_s, 0.05 * 200 * o.master_cost_s);
+  EXPECT_NEAR(t.MasterSeconds(), r.seconds, 2 * kCost);
+}
+
+TEST(Sim, ASlowerWorkerGetsFewerColumns) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(2);
+  o.speed_factor = {1.0, 2.0};
+  SimTransport t(m, o);
+  RunResult r = Simulate(m, Shots(300), &t);
+  EXPECT_EQ(t.Columns(0) + t.Columns(1), r.columns);
+  EXPECT_NEAR(double(t.Columns(0)) / double(t.Columns(1)), 2.0, 0.1);
+  EXPECT_NEAR(r.seconds, 300 * kCost / 1.5, 2 * kCost);  // 1.5 workers' worth
+}
+
+// Slowed 4x for 0.4 s: it does 0.1 s of work in that time instead of 0.4.
+TEST(Sim, ASlowdownForAWhile) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(1);
+  o.slowdowns = {{0, 0.2, 0.6, 4.0}};
+  SimTransport t(m, o);
+  RunResult r = Simulate(m, Shots(100), &t);
+  EXPECT_NEAR(r.seconds, 100 * kCost + 0.3, 1e-9);
+}
+
+TEST(Sim, WorkersSharingCores) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(2);
+  o.host_cores = 1;  // two workers on one core: no faster than one
+  SimTransport one(m, o);
+  EXPECT_NEAR(Simulate(m, Shots(100), &one).seconds, 100 * kCost, 1e-9);
+  o.host_cores = 2;
+  SimTransport two(m, o);
+  EXPECT_NEAR(Simulate(m, Shots(100), &two).seconds, 50 * kCost, 1e-9);
+}
+
+// A crash: the master hears of it, its patches go to the others, nothing
+// is shot twice or lost, and the answer is the sequential one.
+TEST(Sim, ACrashedWorkerLosesNothing) {
+  Mesh m = BoxMesh();
+  RunOptions ro = Shots(0);
+  ro.epsilon = 1e-4;
+  Solver seq(m, true);
+  ASSERT_EQ(RunSequential(m, ro, &seq, nullptr).status, RunStatus::kConverged);
+
+  SimOptions o = Fixed(3);
+  o.latency_s = 1e-3;
+  o.crashes = {{1, 0.5}, {2, 1.0}};
+  SimTransport t(m, o);
+  Solver par(m, true);
+  std::vector<std::string> warnings;
+  RunResult r = RunMaster(m, ro, &par, &t, nullptr, [&](const std::string& line, bool warning) {
+    if (warning) warnings.push_back(line);
+  });
+  ASSERT_EQ(r.status, RunStatus::kConverged) << r.why;
+  EXPECT_GT(r.seconds, 1.0);  // the crashes happened during the run
+  EXPECT_EQ(r.lost, 2);
+  EXPECT_EQ(r.stale, 0);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_NE(warnings[0].find("simulated worker 1: lost"), std::string::npos) << warnings[0];
+  EXPECT_EQ(t.Columns(0) + t.Columns(1) + t.Columns(2), r.columns);
+  EXPECT_FALSE(r.fell_back);
+  long shots = 0;
+  for (size_t p = 0; p < m.patches.size(); ++p) shots += par.TimesShot(int(p));
+  EXPECT_EQ(shots, r.shots);
+  const auto a = FaceRadiosity(m, seq.radiosity()), b = FaceRadiosity(m, par.radiosity());
+  for (size_t f = 0; f < a.size(); ++f)
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(b[f][c], a[f][c], 0.005 * a[f][c] + 1e-9) << f;
+}
+
+TEST(Sim, EveryWorkerLostMeansTheMasterComputes) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(2);
+  o.crashes = {{0, 0.05}, {1, 0.05}};
+  SimTransport t(m, o);
+  RunResult r = Simulate(m, Shots(50), &t);
+  EXPECT_TRUE(r.fell_back);
+  EXPECT_EQ(r.shots, 50);
+}
+
+// More workers than patches with light to shoot, all joining in one Poll:
+// the first fill runs out of patches and must still send what it filled
+// (the shipped scenes have 4 (maze) and 6 (room, cornell) emitting
+// patches).
+TEST(Sim, MoreWorkersThanLightsJoiningTogether) {
+  const glm::dvec3 dark(0.0);
+  MeshOptions one;
+  one.patch_size = 2.0;  // a patch per wall, one of them a light
+  Mesh m = MakeMesh(Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0), dark, dark, dark, dark, dark}),
+                    one);
+  SimTransport t(m, Fixed(3));
+  RunOptions o = Shots(20);
+  o.max_seconds = 10;
+  RunResult r = Simulate(m, o, &t);
+  EXPECT_EQ(r.shots, 20) << r.why;
+}
+
+TEST(Sim, SameInputsSameRun) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(5);
+  o.speed_factor = {1, 1.3, 0.7, 2, 1};
+  o.latency_s = 3e-4;
+  o.bandwidth_bps = 5e7;
+  SimTransport a(m, o), b(m, o);
+  Solver sa(m, true), sb(m, true);
+  RunResult ra = Simulate(m, Shots(150), &a, &sa), rb = Simulate(m, Shots(150), &b, &sb);
+  EXPECT_EQ(ra.seconds, rb.seconds);
+  EXPECT_EQ(ra.bytes_received, rb.bytes_received);
+  for (int w = 0; w < 5; ++w) EXPECT_EQ(a.Columns(w), b.Columns(w));
+  EXPECT_EQ(sa.radiosity(), sb.radiosity());
+}
+
+}  // namespace
