@@ -11,7 +11,7 @@ LDLIBS   += $(shell pkg-config --libs $(PKGS) 2>/dev/null) -lpthread
 B        := build
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp master.cpp results.cpp image.cpp
+LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp subdivide.cpp master.cpp results.cpp image.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)
 LIB_OBJS  := $(LIB_SRCS:%.cpp=$(B)/%.o)
 TEST_OBJS := $(TEST_SRCS:tests/%.cpp=$(B)/tests/%.o)

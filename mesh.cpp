@@ -262,9 +262,12 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
   return true;
 }
 
-void Mesh::Leaves(int patch, std::vector<int>* out) const {
+namespace {
+
+// Depth first from the ids on `stack` (the last one first), children in order.
+void CollectLeaves(const std::vector<Element>& elems, std::vector<int> stack,
+                   std::vector<int>* out) {
   out->clear();
-  std::vector<int> stack(patches[patch].elements.rbegin(), patches[patch].elements.rend());
   while (!stack.empty()) {
     int e = stack.back();
     stack.pop_back();
@@ -276,10 +279,140 @@ void Mesh::Leaves(int patch, std::vector<int>* out) const {
   }
 }
 
+}  // namespace
+
+void Mesh::Leaves(int patch, std::vector<int>* out) const {
+  CollectLeaves(elems, {patches[patch].elements.rbegin(), patches[patch].elements.rend()}, out);
+}
+
+void Mesh::LeavesUnder(int elem, std::vector<int>* out) const {
+  CollectLeaves(elems, {elem}, out);
+}
+
 glm::dvec3 Mesh::Centroid(int elem) const {
   const Element& e = elems[elem];
   int n = e.IsTriangle() ? 3 : 4;
   glm::dvec3 c(0.0);
   for (int k = 0; k < n; ++k) c += verts[e.v[k]];
   return c / double(n);
+}
+
+namespace {
+
+int Corners(const Element& e) { return e.IsTriangle() ? 3 : 4; }
+
+uint64_t Undirected(int a, int b) { return a < b ? EdgeKey(a, b) : EdgeKey(b, a); }
+
+int Find(const std::unordered_map<uint64_t, int>& m, uint64_t key) {
+  auto it = m.find(key);
+  return it == m.end() ? -1 : it->second;
+}
+
+void Own(Mesh* m, int elem, bool add) {
+  const Element& e = m->elems[elem];
+  for (int k = 0, n = Corners(e); k < n; ++k) {
+    const uint64_t key = EdgeKey(e.v[k], e.v[(k + 1) % n]);
+    if (add) m->owner[key] = elem;
+    else m->owner.erase(key);
+  }
+}
+
+// The midpoint of edge a -> b of element `elem` of face `face`: the one a
+// neighbour made, or a new vertex, which the neighbour across the edge (if
+// it is a leaf with that very edge) then holds as a T-vertex.
+int Midpoint(Mesh* m, int face, int a, int b) {
+  const uint64_t key = Undirected(a, b);
+  if (int v = Find(m->midpoint, key); v >= 0) return v;
+  const int v = int(m->verts.size());
+  m->verts.push_back(EdgePoint(m->verts[a], m->verts[b], 1, 2));
+  m->faces[face].divide_verts.push_back(v);
+  m->midpoint.emplace(key, v);
+  m->split.emplace(v, key);
+  if (int n = Find(m->owner, EdgeKey(b, a)); n >= 0) {
+    Element& ne = m->elems[n];
+    for (int k = 0, c = Corners(ne); k < c; ++k)
+      if (ne.v[k] == b && ne.v[(k + 1) % c] == a) ne.mid[k] = v;
+  }
+  return v;
+}
+
+}  // namespace
+
+void ConnectEdges(Mesh* mesh) {
+  if (mesh->connected) return;
+  mesh->connected = true;
+  for (size_t e = 0; e < mesh->elems.size(); ++e)
+    if (mesh->elems[e].IsLeaf()) Own(mesh, int(e), true);
+}
+
+void Divide(Mesh* mesh, int32_t elem) {
+  ConnectEdges(mesh);
+  CHECK(elem >= 0 && size_t(elem) < mesh->elems.size() && mesh->elems[elem].IsLeaf());
+  const Element parent = mesh->elems[elem];
+  const int face = mesh->patches[parent.patch].face;
+  const int n = Corners(parent);
+  int mid[4];
+  for (int k = 0; k < n; ++k) mid[k] = Midpoint(mesh, face, parent.v[k], parent.v[(k + 1) % n]);
+  const std::array<int, 4>& v = parent.v;
+  std::array<std::array<int, 4>, kChildren> kids;
+  if (n == 3) {
+    kids = {{{v[0], mid[0], mid[2], -1}, {mid[0], v[1], mid[1], -1},
+             {mid[2], mid[1], v[2], -1}, {mid[0], mid[1], mid[2], -1}}};
+  } else {
+    const int c = int(mesh->verts.size());
+    const auto& p = mesh->verts;
+    mesh->verts.push_back(0.25 * (p[v[0]] + p[v[1]] + p[v[2]] + p[v[3]]));
+    mesh->faces[face].divide_verts.push_back(c);
+    kids = {{{v[0], mid[0], c, mid[3]}, {mid[0], v[1], mid[1], c},
+             {c, mid[1], v[2], mid[2]}, {mid[3], c, mid[2], v[3]}}};
+  }
+  Own(mesh, elem, false);
+  ++mesh->divided;
+  const int first = int(mesh->elems.size());
+  mesh->elems[elem].first_child = first;
+  for (const auto& kv : kids) {
+    Element child;
+    child.v = kv;
+    child.patch = parent.patch;
+    child.parent = elem;
+    child.level = parent.level + 1;
+    child.area = PolyArea(*mesh, child);
+    // A neighbour already finer than the parent by two levels leaves a
+    // T-vertex on the child's edge (the subdivision policy avoids it).
+    for (int k = 0; k < n; ++k)
+      child.mid[k] = Find(mesh->midpoint, Undirected(kv[k], kv[(k + 1) % n]));
+    mesh->elems.push_back(child);
+    Own(mesh, int(mesh->elems.size()) - 1, true);
+  }
+}
+
+void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out) {
+  out->clear();
+  const Element& e = mesh.elems[elem];
+  auto add = [&](int a, int b) {
+    int n = Find(mesh.owner, EdgeKey(a, b));
+    if (n >= 0 && std::find(out->begin(), out->end(), n) == out->end()) out->push_back(n);
+    return n >= 0;
+  };
+  for (int k = 0, c = Corners(e); k < c; ++k) {
+    const int p = e.v[k], q = e.v[(k + 1) % c];
+    if (add(q, p)) continue;               // alike
+    if (e.mid[k] >= 0) {                   // finer, across a T-vertex
+      add(q, e.mid[k]);
+      add(e.mid[k], p);
+      continue;
+    }
+    // Coarser: p -> q is half of the neighbour's edge, split at p or q.
+    for (int s : {p, q}) {
+      auto it = mesh.split.find(s);
+      if (it == mesh.split.end()) continue;
+      const int r0 = int(it->second >> 32), r1 = int(uint32_t(it->second));
+      const int other = s == p ? q : p;
+      if (other != r0 && other != r1) continue;
+      // Our way along the coarse edge runs from `from` to `to`.
+      const int far = other == r0 ? r1 : r0;
+      const int from = s == p ? far : other, to = s == p ? other : far;
+      add(to, from);
+    }
+  }
 }

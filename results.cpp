@@ -1,5 +1,6 @@
 #include "results.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -179,10 +180,30 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   s.positions = mesh.verts;
   std::vector<glm::dvec3> sum(mesh.verts.size(), glm::dvec3(0.0));
   std::vector<double> w(mesh.verts.size(), 0.0);
+  std::vector<int> t_leaves;  // leaves with T-vertices on their edges
   for (size_t e = 0; e < mesh.elems.size(); ++e) {
     const Element& el = mesh.elems[e];
     if (!el.IsLeaf()) continue;
-    s.polys.push_back(el.v);
+    const int n = el.IsTriangle() ? 3 : 4;
+    if (std::all_of(el.mid.begin(), el.mid.begin() + n, [](int m) { return m < 0; })) {
+      s.polys.push_back(el.v);
+    } else {
+      // Drawn as a fan from a T-vertex over its outline, so that it meets
+      // its finer neighbours' edges exactly (no pixel cracks).
+      t_leaves.push_back(int(e));
+      std::vector<int> outline;
+      int from = -1;  // the first T-vertex: no fan triangle is degenerate
+      for (int k = 0; k < n; ++k) {
+        outline.push_back(el.v[k]);
+        if (el.mid[k] >= 0) {
+          if (from < 0) from = int(outline.size());
+          outline.push_back(el.mid[k]);
+        }
+      }
+      const int m = int(outline.size());
+      for (int i = 1; i + 1 < m; ++i)
+        s.polys.push_back({outline[from], outline[(from + i) % m], outline[(from + i + 1) % m], -1});
+    }
     const glm::dvec3 b = glm::max(elem_b[e], glm::dvec3(0.0));
     for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
       sum[el.v[k]] += b * el.area;
@@ -208,14 +229,17 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   };
   std::unordered_map<Key, int, Hash> group_of;
   std::vector<int> group(mesh.verts.size());
-  for (const MeshFace& f : mesh.faces)
-    for (int v = f.vbegin; v < f.vend; ++v) {
+  for (const MeshFace& f : mesh.faces) {
+    auto join = [&](int v) {
       Key k{mesh.verts[v],
             {std::llround(f.normal.x * 1e6), std::llround(f.normal.y * 1e6),
              std::llround(f.normal.z * 1e6)},
             f.material};
       group[v] = group_of.emplace(k, int(group_of.size())).first->second;
-    }
+    };
+    for (int v = f.vbegin; v < f.vend; ++v) join(v);
+    for (int v : f.divide_verts) join(v);
+  }
   std::vector<glm::dvec3> gsum(group_of.size(), glm::dvec3(0.0));
   std::vector<double> gw(group_of.size(), 0.0);
   for (size_t v = 0; v < sum.size(); ++v) {
@@ -225,5 +249,17 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   s.colors.resize(mesh.verts.size(), glm::vec3(0.0f));
   for (size_t v = 0; v < sum.size(); ++v)
     if (gw[group[v]] > 0) s.colors[v] = glm::vec3(gsum[group[v]] / gw[group[v]]);
+  // A T-vertex takes the value interpolated along the coarser edge it lies
+  // on, so both sides shade that edge alike (no seam). Coarser first: a
+  // corner of a finer element may itself be a T-vertex of a coarser one.
+  std::stable_sort(t_leaves.begin(), t_leaves.end(),
+                   [&](int a, int b) { return mesh.elems[a].level < mesh.elems[b].level; });
+  for (int e : t_leaves) {
+    const Element& el = mesh.elems[e];
+    const int n = el.IsTriangle() ? 3 : 4;
+    for (int k = 0; k < n; ++k)
+      if (el.mid[k] >= 0)
+        s.colors[el.mid[k]] = 0.5f * (s.colors[el.v[k]] + s.colors[el.v[(k + 1) % n]]);
+  }
   return s;
 }

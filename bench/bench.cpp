@@ -38,7 +38,7 @@ ToTarget Reach(const Scene& scene, const Mesh& mesh, int res, bool overshoot,
   volatile std::sig_atomic_t stop = 0;
   o.stop = &stop;
   Solver s(mesh, overshoot);
-  RunSequential(mesh, o, &s, [&](const Sample& smp) {
+  RunSequential(&mesh, o, &s, nullptr, [&](const Sample& smp) {
     double rms, rel;
     RmsError(scene, FaceRadiosity(mesh, s.radiosity()), ref, &rms, &rel);
     if (rel <= target && !stop) {
@@ -51,7 +51,7 @@ ToTarget Reach(const Scene& scene, const Mesh& mesh, int res, bool overshoot,
   o.max_shots = std::max(1L, t.shots);
   o.stop = nullptr;
   Solver s2(mesh, overshoot);
-  RunResult r = RunSequential(mesh, o, &s2, nullptr);
+  RunResult r = RunSequential(&mesh, o, &s2, nullptr, nullptr);
   t.seconds = r.seconds;
   t.master_per_shot_us = 1e6 * (r.select_s + r.shoot_s) / std::max(1L, r.shots);
   return t;
@@ -104,7 +104,7 @@ int main(int argc, char** argv) {
     o.resolution = res;
     o.epsilon = 1e-6;
     Solver ref_solver(mesh, true);
-    RunResult rr = RunSequential(mesh, o, &ref_solver, nullptr);
+    RunResult rr = RunSequential(&mesh, o, &ref_solver, nullptr, nullptr);
     std::vector<glm::dvec3> ref = FaceRadiosity(mesh, ref_solver.radiosity());
     for (bool over : {true, false}) {
       ToTarget t = Reach(scene, mesh, res, over, ref, 0.01);
