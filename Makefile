@@ -27,6 +27,9 @@ $(B)/unit_tests: $(TEST_OBJS) $(LIB_OBJS)
 $(B)/radiosity-bench: $(B)/bench/bench.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
+$(B)/radiosity-waves: $(B)/bench/waves.o $(LIB_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
 $(B)/bench/%.o: bench/%.cpp | $(B)
 	$(CXX) $(CPPFLAGS) -I. $(CXXFLAGS) -c -o $@ $<
 
@@ -55,7 +58,7 @@ demo: deps
 	@echo "pictures and results: $(CURDIR)/out/cornell (final.png, result.csv, log.csv, result.ply)"
 
 bench: deps
-	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench
+	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-waves
 	@sh bench/run.sh
 
 install: radiosity

@@ -260,11 +260,8 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
         const Element& el = mesh.elems[id];
         // The outline: corners, and T-vertices where finer neighbours meet
         // this element, so that both sides scan the very same edges.
-        int vid[8], nv = 0;
-        for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
-          vid[nv++] = el.v[k];
-          if (el.mid[k] >= 0) vid[nv++] = el.mid[k];
-        }
+        int vid[8];
+        const int nv = Outline(el, vid);
         ++elements;
         uint32_t all = ~0u, any = 0;
         for (int i = 0; i < nv; ++i) {

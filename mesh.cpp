@@ -386,6 +386,19 @@ void Divide(Mesh* mesh, int32_t elem) {
   }
 }
 
+int Outline(const Element& e, int out[8]) {
+  int ids[8], n = 0, from = -1;
+  for (int k = 0; k < Corners(e); ++k) {
+    ids[n++] = e.v[k];
+    if (e.mid[k] < 0) continue;
+    if (from < 0) from = n;
+    ids[n++] = e.mid[k];
+  }
+  if (from < 0) from = 0;
+  for (int i = 0; i < n; ++i) out[i] = ids[(from + i) % n];
+  return n;
+}
+
 void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out) {
   out->clear();
   const Element& e = mesh.elems[elem];

@@ -129,6 +129,11 @@ void ConnectEdges(Mesh* mesh);
 // The key of the edge a -> b: directed (a, b) or undirected (min, max).
 inline uint64_t EdgeKey(int a, int b) { return uint64_t(uint32_t(a)) << 32 | uint32_t(b); }
 
+// The outline of element `e`: its corners and the T-vertices on its
+// edges, counter-clockwise, from its first T-vertex if it has one (so a
+// fan from out[0] has no degenerate triangle). Returns the count, <= 8.
+int Outline(const Element& e, int out[8]);
+
 // Leaf elements of the same face sharing a piece of an edge with leaf
 // `elem`: alike, finer (across a T-vertex) or coarser. Needs
 // ConnectEdges().

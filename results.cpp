@@ -7,6 +7,8 @@
 #include <fstream>
 #include <unordered_map>
 
+#include "check.h"
+
 std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   std::vector<glm::dvec3> sum(mesh.faces.size(), glm::dvec3(0.0));
   std::vector<double> area(mesh.faces.size(), 0.0);
@@ -184,25 +186,15 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   for (size_t e = 0; e < mesh.elems.size(); ++e) {
     const Element& el = mesh.elems[e];
     if (!el.IsLeaf()) continue;
-    const int n = el.IsTriangle() ? 3 : 4;
-    if (std::all_of(el.mid.begin(), el.mid.begin() + n, [](int m) { return m < 0; })) {
+    // Drawn as a fan over its outline: where finer neighbours meet it,
+    // it meets their edges exactly (no pixel cracks).
+    int out[8];
+    const int m = Outline(el, out);
+    if (m == (el.IsTriangle() ? 3 : 4)) {
       s.polys.push_back(el.v);
     } else {
-      // Drawn as a fan from a T-vertex over its outline, so that it meets
-      // its finer neighbours' edges exactly (no pixel cracks).
       t_leaves.push_back(int(e));
-      std::vector<int> outline;
-      int from = -1;  // the first T-vertex: no fan triangle is degenerate
-      for (int k = 0; k < n; ++k) {
-        outline.push_back(el.v[k]);
-        if (el.mid[k] >= 0) {
-          if (from < 0) from = int(outline.size());
-          outline.push_back(el.mid[k]);
-        }
-      }
-      const int m = int(outline.size());
-      for (int i = 1; i + 1 < m; ++i)
-        s.polys.push_back({outline[from], outline[(from + i) % m], outline[(from + i + 1) % m], -1});
+      for (int i = 1; i + 1 < m; ++i) s.polys.push_back({out[0], out[i], out[i + 1], -1});
     }
     const glm::dvec3 b = glm::max(elem_b[e], glm::dvec3(0.0));
     for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
@@ -262,4 +254,76 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
         s.colors[el.mid[k]] = 0.5f * (s.colors[el.v[k]] + s.colors[el.v[(k + 1) % n]]);
   }
   return s;
+}
+
+namespace {
+
+// Signed twice-area of (a, b, x) about the normal n.
+double Side(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& x, const glm::dvec3& n) {
+  return glm::dot(glm::cross(b - a, x - a), n);
+}
+
+// The radiosity as drawn at point x of leaf e: interpolated over the fan
+// triangle of its outline that holds x best (all weights >= 0 but for
+// rounding), as Render does.
+glm::dvec3 Drawn(const Mesh& mesh, const ShadedMesh& shaded, int e, const glm::dvec3& x,
+                 const glm::dvec3& n) {
+  int out[8];
+  const int m = Outline(mesh.elems[e], out);
+  glm::dvec3 value(0.0);
+  double best = -HUGE_VAL;
+  for (int i = 1; i + 1 < m; ++i) {
+    const int t[3] = {out[0], out[i], out[i + 1]};
+    double w[3];
+    for (int k = 0; k < 3; ++k) w[k] = Side(mesh.verts[t[(k + 1) % 3]], mesh.verts[t[(k + 2) % 3]], x, n);
+    const double sum = std::max(1e-300, w[0] + w[1] + w[2]);
+    const double lo = std::min({w[0], w[1], w[2]}) / sum;
+    if (lo <= best) continue;
+    best = lo;
+    value = glm::dvec3(0.0);
+    for (int k = 0; k < 3; ++k) value += std::max(0.0, w[k]) * glm::dvec3(shaded.colors[t[k]]);
+    value /= std::max(1e-300, std::max(0.0, w[0]) + std::max(0.0, w[1]) + std::max(0.0, w[2]));
+  }
+  return value;
+}
+
+}  // namespace
+
+void FieldError(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const Mesh& ref,
+                const std::vector<glm::dvec3>& ref_b, double* rms, double* rel_rms) {
+  CHECK(mesh.patches.size() == ref.patches.size());
+  const ShadedMesh shaded = Shade(mesh, elem_b), ref_shaded = Shade(ref, ref_b);
+  const double tol = 1e-12 * mesh.scene_diagonal * mesh.scene_diagonal;
+  auto inside = [&](int e, const glm::dvec3& x, const glm::dvec3& n) {
+    const Element& el = mesh.elems[e];
+    const int c = el.IsTriangle() ? 3 : 4;
+    for (int k = 0; k < c; ++k)
+      if (Side(mesh.verts[el.v[k]], mesh.verts[el.v[(k + 1) % c]], x, n) < -tol) return false;
+    return true;
+  };
+  double se = 0, area = 0, mean = 0;
+  for (size_t r = 0; r < ref.elems.size(); ++r) {
+    const Element& rel = ref.elems[r];
+    if (!rel.IsLeaf()) continue;
+    const glm::dvec3 x = ref.Centroid(int(r));
+    const glm::dvec3 n = ref.FaceOf(int(r)).normal;
+    // Patches are cut alike, so the point lies under the same patch here.
+    int e = -1;
+    for (int top : mesh.patches[rel.patch].elements)
+      if (inside(top, x, n)) { e = top; break; }
+    if (e < 0) e = mesh.patches[rel.patch].elements[0];  // rounding at an edge
+    while (!mesh.elems[e].IsLeaf()) {
+      int next = mesh.elems[e].first_child;
+      for (int k = 0; k < kChildren; ++k)
+        if (inside(mesh.elems[e].first_child + k, x, n)) { next = mesh.elems[e].first_child + k; break; }
+      e = next;
+    }
+    const glm::dvec3 want = Drawn(ref, ref_shaded, int(r), x, n);
+    const glm::dvec3 d = Drawn(mesh, shaded, e, x, n) - want;
+    se += rel.area * glm::dot(d, d) / 3;
+    mean += rel.area * (want.r + want.g + want.b) / 3;
+    area += rel.area;
+  }
+  *rms = area > 0 ? std::sqrt(se / area) : 0;
+  *rel_rms = mean > 0 ? *rms / (mean / area) : 0;
 }

@@ -93,19 +93,27 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::d
     const int la = mesh.elems[a].level, lc = mesh.elems[c].level;
     return la != lc ? la < lc : a < c;
   });
+  // A pass that finds only a few (the radiosity still settling, hemicube
+  // noise) is quiet: at the floor, subdivision is finished, and the few are
+  // not worth a wave of their own.
+  quiet_ = double(out.size()) < opts_.quiet * double(wave_start_leaves_);
+  if (quiet_ && threshold_ <= opts_.floor) {
+    finished_ = true;
+    out.clear();
+  }
   divided_in_wave_ += long(out.size());
-  if (out.empty() && threshold_ <= opts_.floor) finished_ = true;
   threshold_ = std::max(opts_.floor, threshold_ * opts_.decay);
   return out;
 }
 
 bool Subdivider::WaveOver(bool converged) const {
   return opts_.waves && divided_in_wave_ > 0 &&
-         (converged || finished_ || double(divided_in_wave_) >= opts_.wave_fraction * wave_start_leaves_);
+         (converged || quiet_ || double(divided_in_wave_) >= opts_.wave_fraction * wave_start_leaves_);
 }
 
 void Subdivider::StartWave(const Mesh& mesh) {
   wave_start_leaves_ = mesh.LeafCount();
   divided_in_wave_ = 0;
   last_pass_ = -1;
+  quiet_ = false;
 }

@@ -28,13 +28,14 @@
 
 struct SubdivideOptions {
   double threshold = 0.5;  // the dividing factor a leaf must exceed, at first
-  double floor = 0.1;      // ... lowered by `decay` every pass down to this
+  double floor = 0.2;      // ... lowered by `decay` every pass down to this
   double decay = 0.7;
   double min_size = 0;     // no child's edge shorter than this; 0: scene diagonal / 400
-  int max_level = 4;       // deepest level below the elements BuildMesh made
+  int max_level = 3;       // deepest level below the elements BuildMesh made
   bool waves = true;       // restart on the finer mesh after wave_fraction
   double wave_fraction = 0.2;  // of the wave's starting elements divided
   long between = 10;       // shots between passes (at least 10)
+  double quiet = 0.002;    // a pass dividing under this fraction of the leaves is quiet
 };
 
 class Subdivider {
@@ -54,17 +55,18 @@ class Subdivider {
   std::vector<int32_t> Pass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
                             const glm::dvec3& ambient, long shots);
 
-  // True when the current wave should end: wave_fraction of its starting
-  // elements divided, or subdivision finished or the wave `converged`
-  // with a division in it (so that the last wave solves the final mesh
-  // from scratch and no radiosity in the answer was shared out by
-  // gradient). Always false without waves.
+  // True when the current wave should end, once it divided anything:
+  // wave_fraction of its starting elements divided, or a pass found little
+  // more to divide (`quiet`), or the wave `converged`. So
+  // waves stay short and the last one solves the final mesh from scratch,
+  // with no radiosity in the answer shared out by gradient. Always false
+  // without waves.
   bool WaveOver(bool converged = false) const;
   // A new wave starts on `mesh` as it is now.
   void StartWave(const Mesh& mesh);
 
-  // The threshold is at its floor and a pass divided nothing: no more
-  // passes.
+  // A pass at the floor threshold found little to divide (under `quiet` of
+  // the leaves; it then divides nothing): no more passes.
   bool finished() const { return finished_; }
   long divided_in_wave() const { return divided_in_wave_; }
   long first_shots() const { return first_; }
@@ -83,6 +85,7 @@ class Subdivider {
   long wave_start_leaves_ = 0;
   long divided_in_wave_ = 0;
   bool finished_ = false;
+  bool quiet_ = false;        // the last pass divided under `quiet` of the leaves
   long passes_ = 0;
   double seconds_ = 0;
 };
