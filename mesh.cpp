@@ -317,21 +317,69 @@ void Own(Mesh* m, int elem, bool add) {
   }
 }
 
-// The midpoint of edge a -> b of element `elem` of face `face`: the one a
-// neighbour made, or a new vertex, which the neighbour across the edge (if
-// it is a leaf with that very edge) then holds as a T-vertex.
-int Midpoint(Mesh* m, int face, int a, int b) {
-  const uint64_t key = Undirected(a, b);
-  if (int v = Find(m->midpoint, key); v >= 0) return v;
+Segment Seg(const Mesh& m, int a, int b) {
+  const glm::dvec3 &p = m.verts[a], &q = m.verts[b];
+  return LexLess(p, q) ? Segment(p, q) : Segment(q, p);
+}
+
+// Adds `elem`'s edges that have no neighbour in its face to Mesh::border,
+// or takes all its edges out.
+void Border(Mesh* m, int elem, bool add) {
+  const Element& e = m->elems[elem];
+  for (int k = 0, n = Corners(e); k < n; ++k) {
+    const int p = e.v[k], q = e.v[(k + 1) % n];
+    if (!add) {
+      auto it = m->border.find(Seg(*m, p, q));
+      if (it == m->border.end()) continue;
+      auto& v = it->second;
+      v.erase(std::remove(v.begin(), v.end(), elem), v.end());
+      if (v.empty()) m->border.erase(it);
+    } else if (Find(m->owner, EdgeKey(q, p)) < 0) {
+      m->border[Seg(*m, p, q)].push_back(elem);
+    }
+  }
+}
+
+// Element n's edge (p, q) (its own vertex ids) becomes home to T-vertex v.
+void SetMid(Element* n, int p, int q, int v) {
+  for (int k = 0, c = Corners(*n); k < c; ++k)
+    if (n->v[k] == p && n->v[(k + 1) % c] == q) n->mid[k] = v;
+}
+
+int NewMidpoint(Mesh* m, int face, int a, int b, const glm::dvec3& p) {
   const int v = int(m->verts.size());
-  m->verts.push_back(EdgePoint(m->verts[a], m->verts[b], 1, 2));
+  m->verts.push_back(p);
   m->faces[face].divide_verts.push_back(v);
-  m->midpoint.emplace(key, v);
-  m->split.emplace(v, key);
+  m->midpoint.emplace(Undirected(a, b), v);
+  m->split.emplace(v, Undirected(a, b));
+  return v;
+}
+
+// The midpoint of edge a -> b of an element of face `face`: the one a
+// neighbour made, or a new vertex, which the neighbour across the edge (if
+// it is a leaf with that very edge) then holds as a T-vertex; so do leaves
+// of other faces along the same edge, with a copy of their own.
+int Midpoint(Mesh* m, int face, int a, int b) {
+  if (int v = Find(m->midpoint, Undirected(a, b)); v >= 0) return v;
+  const glm::dvec3 p = EdgePoint(m->verts[a], m->verts[b], 1, 2);
+  const int v = NewMidpoint(m, face, a, b, p);
   if (int n = Find(m->owner, EdgeKey(b, a)); n >= 0) {
+    SetMid(&m->elems[n], b, a, v);
+    return v;
+  }
+  auto it = m->border.find(Seg(*m, a, b));
+  if (it == m->border.end()) return v;
+  const glm::dvec3 &pa = m->verts[a], &pb = m->verts[b];
+  for (int n : it->second) {
     Element& ne = m->elems[n];
-    for (int k = 0, c = Corners(ne); k < c; ++k)
-      if (ne.v[k] == b && ne.v[(k + 1) % c] == a) ne.mid[k] = v;
+    const int nf = m->patches[ne.patch].face;
+    if (nf == face || !ne.IsLeaf()) continue;
+    for (int k = 0, c = Corners(ne); k < c; ++k) {
+      const int x = ne.v[k], y = ne.v[(k + 1) % c];
+      const glm::dvec3 &px = m->verts[x], &py = m->verts[y];
+      if (ne.mid[k] >= 0 || !((px == pa && py == pb) || (px == pb && py == pa))) continue;
+      ne.mid[k] = NewMidpoint(m, nf, x, y, p);
+    }
   }
   return v;
 }
@@ -343,6 +391,8 @@ void ConnectEdges(Mesh* mesh) {
   mesh->connected = true;
   for (size_t e = 0; e < mesh->elems.size(); ++e)
     if (mesh->elems[e].IsLeaf()) Own(mesh, int(e), true);
+  for (size_t e = 0; e < mesh->elems.size(); ++e)
+    if (mesh->elems[e].IsLeaf()) Border(mesh, int(e), true);
 }
 
 void Divide(Mesh* mesh, int32_t elem) {
@@ -367,6 +417,7 @@ void Divide(Mesh* mesh, int32_t elem) {
              {c, mid[1], v[2], mid[2]}, {mid[3], c, mid[2], v[3]}}};
   }
   Own(mesh, elem, false);
+  Border(mesh, elem, false);
   ++mesh->divided;
   const int first = int(mesh->elems.size());
   mesh->elems[elem].first_child = first;
@@ -384,6 +435,7 @@ void Divide(Mesh* mesh, int32_t elem) {
     mesh->elems.push_back(child);
     Own(mesh, int(mesh->elems.size()) - 1, true);
   }
+  for (int k = 0; k < kChildren; ++k) Border(mesh, first + k, true);
 }
 
 int Outline(const Element& e, int out[8]) {

@@ -75,6 +75,15 @@ struct PointHash {
   }
 };
 
+// A segment by its end points in lexicographic order: an edge that faces
+// (with their own vertex ids) share.
+using Segment = std::pair<glm::dvec3, glm::dvec3>;
+struct SegmentHash {
+  size_t operator()(const Segment& s) const {
+    return PointHash()(s.first) * 31 ^ PointHash()(s.second);
+  }
+};
+
 struct MeshOptions {
   // Largest patch edge; 0 picks the default rule: the scene's bounding-box
   // diagonal / 16 (see man page, MESH).
@@ -96,6 +105,9 @@ struct Mesh {
   std::unordered_map<uint64_t, int> midpoint;  // undirected edge -> its midpoint
   std::unordered_map<int, uint64_t> split;     // midpoint -> its undirected edge
   std::unordered_map<uint64_t, int> owner;     // directed edge -> the leaf with it,
+  // Leaves with an edge on their face's border, by the edge's points: the
+  // neighbours in other faces, which get a copy of a midpoint made there.
+  std::unordered_map<Segment, std::vector<int>, SegmentHash> border;
   bool connected = false;                      // once ConnectEdges() ran
   int divided = 0;                             // Divide() calls so far
 
@@ -119,7 +131,9 @@ constexpr int kMaxElements = 20'000'000;
 // Divides leaf element `elem` into kChildren children appended to
 // mesh->elems. Midpoints are computed from their edge's endpoints in the
 // canonical order (bit-identical from either side, and to a neighbouring
-// face cut alike) and reused when a neighbour made them first.
+// face cut alike) and reused when a neighbour made them first; a leaf of
+// another face along the same edge gets its own copy of the point (faces
+// share no vertices) as a T-vertex.
 void Divide(Mesh* mesh, int32_t elem);
 
 // Fills Mesh::owner for the leaves (once; Divide() keeps it since). Not

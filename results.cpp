@@ -242,17 +242,25 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   for (size_t v = 0; v < sum.size(); ++v)
     if (gw[group[v]] > 0) s.colors[v] = glm::vec3(gsum[group[v]] / gw[group[v]]);
   // A T-vertex takes the value interpolated along the coarser edge it lies
-  // on, so both sides shade that edge alike (no seam). Coarser first: a
-  // corner of a finer element may itself be a T-vertex of a coarser one.
+  // on, so both sides shade that edge alike (no seam); so do the vertices
+  // joined with it across coplanar faces. Coarser first: a corner of a
+  // finer element may itself be a T-vertex of a coarser one.
   std::stable_sort(t_leaves.begin(), t_leaves.end(),
                    [&](int a, int b) { return mesh.elems[a].level < mesh.elems[b].level; });
+  std::vector<glm::vec3> on_edge(group_of.size());
+  std::vector<char> is_t(group_of.size(), 0);
+  auto color = [&](int v) { return is_t[group[v]] ? on_edge[group[v]] : s.colors[v]; };
   for (int e : t_leaves) {
     const Element& el = mesh.elems[e];
     const int n = el.IsTriangle() ? 3 : 4;
     for (int k = 0; k < n; ++k)
-      if (el.mid[k] >= 0)
-        s.colors[el.mid[k]] = 0.5f * (s.colors[el.v[k]] + s.colors[el.v[(k + 1) % n]]);
+      if (el.mid[k] >= 0) {
+        on_edge[group[el.mid[k]]] = 0.5f * (color(el.v[k]) + color(el.v[(k + 1) % n]));
+        is_t[group[el.mid[k]]] = 1;
+      }
   }
+  for (size_t v = 0; v < s.colors.size(); ++v)
+    if (is_t[group[v]]) s.colors[v] = on_edge[group[v]];
   return s;
 }
 

@@ -10,7 +10,7 @@
 //   adaptive - the default mesh, subdivision and waves
 //   fine     - uniform, N x N per patch with N such that it has about as
 //              many elements as the adaptive run ends with
-// The error is sampled every patches/50 shots; the time spent measuring it
+// The error is sampled every patches/20 shots; the time spent measuring it
 // is left out of the time axis.
 #include <chrono>
 #include <cmath>
@@ -49,7 +49,7 @@ Curve Run(const Scene& scene, int epp, bool subdivide, const Mesh& ref,
   Solver solver(mesh, true);
   Subdivider sub(&mesh, SubdivideOptions());
   RunOptions o;
-  o.log_every = std::max<long>(1, long(mesh.patches.size()) / 50);
+  o.log_every = std::max<long>(1, long(mesh.patches.size()) / 20);
   Curve c;
   double measuring = 0;  // seconds spent in the callback so far
   c.result = RunSequential(&mesh, o, &solver, subdivide ? &sub : nullptr, [&](const Sample& s) {
@@ -64,8 +64,7 @@ Curve Run(const Scene& scene, int epp, bool subdivide, const Mesh& ref,
   return c;
 }
 
-// First time the curve's error is at most `target` (and stays so for the
-// rest of its wave's samples... simply: the first sample at or below).
+// The first sample time at which the curve's error is at most `target`.
 double TimeTo(const Curve& c, double target) {
   for (const Point& p : c.points)
     if (p.rel <= target) return p.seconds;
@@ -126,10 +125,11 @@ int main(int argc, char** argv) {
       std::fprintf(f, "%s,%s,%.4f,%ld,%d,%ld,%.6g,%.6g\n", name.c_str(), method, p.seconds,
                    p.shots, p.wave, p.elements, p.unshot, p.rel);
     const double to = TimeTo(*c, fine_final);
-    std::printf("run | %s | %s | %ld | %d | %ld | %.2f | %.3f | %.4f | %.2f | %.2f\n",
+    std::printf("run | %s | %s | %ld | %d | %ld | %.2f | %ld | %.1f | %.4f | %.2f | %.2f\n",
                 name.c_str(), method, c->elements, c->result.waves, c->result.shots,
-                c->result.seconds, c->result.subdivide_s, c->points.back().rel, to,
-                to / fine.result.seconds);
+                c->result.seconds, c->result.passes,
+                c->result.passes ? 1e3 * c->result.subdivide_s / c->result.passes : 0.0,
+                c->points.back().rel, to, to / fine.result.seconds);
   }
   std::fclose(f);
   return 0;
