@@ -48,7 +48,7 @@ const char kUsage[] =
     "      --no-waves         one wave: never restart on the finer mesh\n"
     "      --subdivide-floor F  lowest dividing-factor threshold (default 0.2)\n"
     "      --min-element L    smallest element edge made by dividing (default: diagonal / 400)\n"
-    "      --max-level N      deepest division below the built elements, 0..12 (default 3)\n"
+    "      --max-level N      deepest division below the built elements, 0..12 (default 2)\n"
     "      --wave-fraction F  a new wave after F of the elements divided (default 0.2)\n"
     "      --no-rotate        keep the hemicube aligned (default: turned per shot)\n"
     "      --seed N           seed of the hemicube turns (default 1)\n"

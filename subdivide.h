@@ -15,7 +15,9 @@
 // it is dark (hemicube noise in a dark corner is no reason to divide), and
 // never above what the light still unshot (the ambient term) may change.
 // Smooth light (a furnace, two far squares) gives factors of a few percent
-// at most, below the floor, and is never divided.
+// at most, below the floor, and is never divided: at the default hemicube
+// resolution; at R = 64 an element far from the shooters covers a pixel or
+// two, and that noise may be divided.
 #ifndef RADIOSITY_SUBDIVIDE_H
 #define RADIOSITY_SUBDIVIDE_H
 
@@ -30,8 +32,8 @@ struct SubdivideOptions {
   double threshold = 0.5;  // the dividing factor a leaf must exceed, at first
   double floor = 0.2;      // ... lowered by `decay` every pass down to this
   double decay = 0.7;
-  double min_size = 0;     // no child's edge shorter than this; 0: scene diagonal / 400
-  int max_level = 3;       // deepest level below the elements BuildMesh made
+  double min_size = 0;     // no child's longest edge shorter; 0: scene diagonal / 400
+  int max_level = 2;       // deepest level below the elements BuildMesh made
   bool waves = true;       // restart on the finer mesh after wave_fraction
   double wave_fraction = 0.2;  // of the wave's starting elements divided
   long between = 10;       // shots between passes (at least 10)
@@ -44,8 +46,8 @@ class Subdivider {
   Subdivider(Mesh* mesh, const SubdivideOptions& opts);
 
   // Whether a pass is due after `shots` shots of the current wave: not
-  // before first_shots() (all light sources shot once, and 20 to 50
-  // shots), then every `between` shots, until finished().
+  // before every light source has shot once and 20 to 50 shots (patches /
+  // 20), then every `between` shots, until finished().
   bool Due(long shots) const;
 
   // One pass: the leaves whose dividing factor exceeds the threshold, and
@@ -68,9 +70,6 @@ class Subdivider {
   // A pass at the floor threshold found little to divide (under `quiet` of
   // the leaves; it then divides nothing): no more passes.
   bool finished() const { return finished_; }
-  long divided_in_wave() const { return divided_in_wave_; }
-  long first_shots() const { return first_; }
-  double threshold() const { return threshold_; }
   long passes() const { return passes_; }
   // Time spent dividing (policy, Divide, Solver::Divided), as the run
   // loop measured it.

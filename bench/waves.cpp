@@ -3,7 +3,7 @@
 // adds headers and draws the SVGs).
 //   radiosity-waves SCENE.obj CURVES.csv [REF_ELEMENTS]
 // The reference is a converged uniform mesh of REF_ELEMENTS x REF_ELEMENTS
-// elements per patch (default 16: finer than the adaptive run's level 3),
+// elements per patch (default 12: finer than the adaptive run's level 2),
 // and the error is FieldError's (per point: a face's mean does not depend
 // on how its elements are cut). Runs, each to the default epsilon 1e-3:
 //   coarse   - the default mesh (2 x 2 per patch), no subdivision
@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
   std::string name = argv[1];
   name = name.substr(name.find_last_of('/') + 1);
   name = name.substr(0, name.find('.'));
-  const int ref_epp = argc > 3 ? std::atoi(argv[3]) : 16;
+  const int ref_epp = argc > 3 ? std::atoi(argv[3]) : 12;
 
   Mesh ref;
   MeshOptions mo;

@@ -14,7 +14,7 @@
 cd "$(dirname "$0")/.." || exit 1
 R=bench/results
 mkdir -p $R
-REF=${REF_ELEMENTS:-16}
+REF=${REF_ELEMENTS:-12}
 rows=$(mktemp)
 trap 'rm -f "$rows"' EXIT
 echo "scene,method,seconds,shots,wave,elements,unshot_fraction,rel_error" >$R/curves.csv
