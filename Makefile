@@ -11,7 +11,7 @@ LDLIBS   += $(shell pkg-config --libs $(PKGS) 2>/dev/null) -lpthread
 B        := build
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp master.cpp results.cpp image.cpp net.cpp transport.cpp worker.cpp
+LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp subdivide.cpp master.cpp results.cpp image.cpp net.cpp transport.cpp worker.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)
 LIB_OBJS  := $(LIB_SRCS:%.cpp=$(B)/%.o)
 TEST_OBJS := $(TEST_SRCS:tests/%.cpp=$(B)/tests/%.o)
@@ -25,6 +25,9 @@ $(B)/unit_tests: $(TEST_OBJS) $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS) $(shell pkg-config --libs gtest_main)
 
 $(B)/radiosity-bench: $(B)/bench/bench.o $(LIB_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(B)/radiosity-waves: $(B)/bench/waves.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 $(B)/bench/%.o: bench/%.cpp | $(B)
@@ -55,7 +58,7 @@ demo: deps
 	@echo "pictures and results: $(CURDIR)/out/cornell (final.png, result.csv, log.csv, result.ply)"
 
 bench: deps
-	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench
+	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-waves
 	@sh bench/run.sh
 
 install: radiosity
