@@ -369,14 +369,15 @@ int Midpoint(Mesh* m, int face, int a, int b) {
   }
   auto it = m->border.find(Seg(*m, a, b));
   if (it == m->border.end()) return v;
-  const glm::dvec3 &pa = m->verts[a], &pb = m->verts[b];
+  // Copies: NewMidpoint() below grows (and may move) m->verts.
+  const glm::dvec3 pa = m->verts[a], pb = m->verts[b];
   for (int n : it->second) {
     Element& ne = m->elems[n];
     const int nf = m->patches[ne.patch].face;
     if (nf == face || !ne.IsLeaf()) continue;
     for (int k = 0, c = Corners(ne); k < c; ++k) {
       const int x = ne.v[k], y = ne.v[(k + 1) % c];
-      const glm::dvec3 &px = m->verts[x], &py = m->verts[y];
+      const glm::dvec3 px = m->verts[x], py = m->verts[y];
       if (ne.mid[k] >= 0 || !((px == pa && py == pb) || (px == pb && py == pa))) continue;
       ne.mid[k] = NewMidpoint(m, nf, x, y, p);
     }
