@@ -16,7 +16,7 @@ NPROC    := $(shell nproc 2>/dev/null || echo 1)
 SAN      := -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp master.cpp results.cpp image.cpp net.cpp transport.cpp worker.cpp sim.cpp
+LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp subdivide.cpp master.cpp results.cpp image.cpp net.cpp transport.cpp worker.cpp sim.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)
 LIB_OBJS  := $(LIB_SRCS:%.cpp=$(B)/%.o)
 TEST_OBJS := $(TEST_SRCS:tests/%.cpp=$(B)/tests/%.o)
@@ -33,6 +33,9 @@ $(B)/radiosity-bench: $(B)/bench/bench.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 $(B)/radiosity-parallel: $(B)/bench/parallel.o $(B)/bench/svg.o $(LIB_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(B)/radiosity-waves: $(B)/bench/waves.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 $(B)/bench/%.o: bench/%.cpp | $(B)
@@ -68,7 +71,8 @@ demo: deps
 	@echo "pictures and results: $(CURDIR)/out/cornell (final.png, result.csv, log.csv, result.ply)"
 
 bench: deps
-	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-parallel
+	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
+	  $(B)/radiosity-waves
 	@sh bench/run.sh
 
 install: radiosity

@@ -209,7 +209,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
     double s = glm::dot(mf.normal, c) - mf.offset;  // shooter's height over the face
     if (!(s > coplanar)) continue;                  // seen from behind or edge-on
     front.push_back(int(f));
-    for (int i = mf.vbegin; i < mf.vend; ++i) {
+    auto transform = [&](int i) {
       glm::dvec3 d = mesh.verts[i] - c;
       float* p = &local_[3 * size_t(i)];
       p[0] = float(glm::dot(d, u));
@@ -226,7 +226,9 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       s[4] = -p[1] * ix + half; s[5] = -p[2] * ix;         // -x
       s[6] = p[0] * iy + half;  s[7] = p[2] * iy;          // +y
       s[8] = -p[0] * iy + half; s[9] = -p[2] * iy;         // -y
-    }
+    };
+    for (int i = mf.vbegin; i < mf.vend; ++i) transform(i);
+    for (int i : mf.divide_verts) transform(i);
   }
   auto t1 = Clock::now();
 
@@ -256,27 +258,30 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       mesh.Leaves(p, &leaves);
       for (int id : leaves) {
         const Element& el = mesh.elems[id];
-        const int nv = el.IsTriangle() ? 3 : 4;
+        // The outline: corners, and T-vertices where finer neighbours meet
+        // this element, so that both sides scan the very same edges.
+        int vid[8];
+        const int nv = Outline(el, vid);
         ++elements;
         uint32_t all = ~0u, any = 0;
         for (int i = 0; i < nv; ++i) {
-          all &= code_[el.v[i]];
-          any |= code_[el.v[i]];
+          all &= code_[vid[i]];
+          any |= code_[vid[i]];
         }
         for (int h = 0; h < 5; ++h) {
           if ((all >> (5 * h)) & 31) continue;  // wholly outside one plane
-          float pt[8][2];
+          float pt[9][2];  // an 8-gon clipped by one plane
           if (!((any >> (5 * h)) & kNear)) {
             for (int i = 0; i < nv; ++i) {
-              pt[i][0] = screen_[10 * size_t(el.v[i]) + 2 * h];
-              pt[i][1] = screen_[10 * size_t(el.v[i]) + 2 * h + 1];
+              pt[i][0] = screen_[10 * size_t(vid[i]) + 2 * h];
+              pt[i][1] = screen_[10 * size_t(vid[i]) + 2 * h + 1];
             }
             Scan(h, pt, nv, za[h], zb[h], zc[h], id);
             continue;
           }
           // Crosses the near plane: clip in this face's frame, then project.
-          float in[4][3], poly[8][3];
-          for (int i = 0; i < nv; ++i) ToFace(h, &local_[3 * size_t(el.v[i])], in[i]);
+          float in[8][3], poly[9][3];
+          for (int i = 0; i < nv; ++i) ToFace(h, &local_[3 * size_t(vid[i])], in[i]);
           int m = 0;
           for (int i = 0; i < nv; ++i) {
             const int j = (i + 1) % nv;
@@ -285,8 +290,8 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
             if (a[2] >= near) std::copy(a, a + 3, poly[m++]);
             if ((a[2] >= near) != (bq[2] >= near)) {
               // Intersect from the lower vertex id: neighbours agree exactly.
-              const float* lo = el.v[i] < el.v[j] ? a : bq;
-              const float* hi = el.v[i] < el.v[j] ? bq : a;
+              const float* lo = vid[i] < vid[j] ? a : bq;
+              const float* hi = vid[i] < vid[j] ? bq : a;
               const float s = (near - lo[2]) / (hi[2] - lo[2]);
               poly[m][0] = lo[0] + s * (hi[0] - lo[0]);
               poly[m][1] = lo[1] + s * (hi[1] - lo[1]);

@@ -1,7 +1,8 @@
 // One column of form factors: from a shooter patch's centre to every leaf
 // element, by the hemicube (Cohen & Greenberg 1985): a top face and four
 // half side faces, delta form factors per pixel, an item buffer of element
-// ids with a depth test.
+// ids with a depth test. A leaf is drawn by its outline (Outline: corners
+// and T-vertices), so that it meets finer neighbours' edges exactly.
 //
 // Numbers: the shooter's frame and the delta form factors are set up in
 // double; vertices are projected and rasterised in float after being moved

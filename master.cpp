@@ -16,25 +16,12 @@ double Abs(const glm::dvec3& u) { return std::abs(u.r) + std::abs(u.g) + std::ab
 Solver::Solver(const Mesh& mesh, bool overshoot)
     : mesh_(mesh),
       overshoot_(overshoot),
-      b_(mesh.elems.size()),
-      rho_per_area_(mesh.elems.size()),
-      patch_of_(mesh.elems.size()),
-      unshot_(mesh.patches.size()),
       fsum_(mesh.patches.size(), 0.0),
-      lit_(mesh.patches.size(), 0),
-      blind_(mesh.patches.size(), 0),
-      times_shot_(mesh.patches.size(), 0) {
-  for (size_t e = 0; e < mesh.elems.size(); ++e) {
-    b_[e] = mesh.FaceOf(int(e)).emission;
-    rho_per_area_[e] = mesh.FaceOf(int(e)).rho / mesh.elems[e].area;
-    patch_of_[e] = mesh.elems[e].patch;
-  }
+      blind_(mesh.patches.size(), 0) {
   glm::dvec3 rho_area(0.0);
   for (size_t p = 0; p < mesh.patches.size(); ++p) {
     const MeshFace& f = mesh.faces[mesh.patches[p].face];
     const double a = mesh.patches[p].area;
-    unshot_[p] = f.emission;
-    lit_[p] = Abs(f.emission) > 0;
     total_area_ += a;
     emitted_ += (f.emission.r + f.emission.g + f.emission.b) * a;
     rho_area += f.rho * a;
@@ -46,7 +33,35 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
     glm::dvec3 mean = glm::min(rho_area / total_area_, glm::dvec3(1 - 1e-6));
     reflect_ = 1.0 / (1.0 - mean);
   }
+  NewWave();
+}
+
+void Solver::NewWave() {
+  Grow();
+  for (size_t e = 0; e < b_.size(); ++e) b_[e] = mesh_.FaceOf(int(e)).emission;
+  unshot_.resize(mesh_.patches.size());
+  lit_.resize(mesh_.patches.size());
+  for (size_t p = 0; p < unshot_.size(); ++p) {
+    unshot_[p] = mesh_.faces[mesh_.patches[p].face].emission;
+    lit_[p] = Abs(unshot_[p]) > 0;
+  }
+  times_shot_.assign(mesh_.patches.size(), 0);
   Resum();
+}
+
+// Per-element arrays for the elements Divide() has added; a divided
+// element's patch is stored complemented so that Shoot tells it apart
+// from a leaf without touching the Element.
+void Solver::Grow() {
+  const size_t from = patch_of_.size(), n = mesh_.elems.size();
+  b_.resize(n);
+  rho_per_area_.resize(n);
+  patch_of_.resize(n);
+  for (size_t e = 0; e < n; ++e) {
+    const Element& el = mesh_.elems[e];
+    if (e >= from) rho_per_area_[e] = mesh_.FaceOf(int(e)).rho / el.area;
+    patch_of_[e] = el.IsLeaf() ? el.patch : ~el.patch;
+  }
 }
 
 void Solver::Resum() {
@@ -105,10 +120,19 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   // share one ρ it is enough to sum F per patch here (the master's
   // per-shot cost bounds the speedup, paper graph 2).
   const glm::dvec3 xa = x * shooter.area;
+  // Ids increase along a column: the last is the largest.
+  CHECK(column.empty() || size_t(column.back().elem) < patch_of_.size());
   for (const FormFactor& ff : column) {
     const int32_t e = ff.elem;
-    b_[e] += xa * (double(ff.f) * rho_per_area_[e]);
-    const int32_t q = patch_of_[e];
+    int32_t q = patch_of_[e];
+    if (q >= 0) {
+      b_[e] += xa * (double(ff.f) * rho_per_area_[e]);
+    } else {  // divided since the column was computed: each leaf gains alike
+      q = ~q;
+      mesh_.LeavesUnder(e, &leaves_);
+      const glm::dvec3 gain = xa * (double(ff.f) * rho_per_area_[e]);
+      for (int l : leaves_) b_[l] += gain;
+    }
     if (fsum_[q] == 0) touched_.push_back(q);
     fsum_[q] += double(ff.f);
   }
@@ -127,6 +151,82 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   ++times_shot_[p];
   // The running sums drift by rounding; a full sum every sweep bounds it.
   if (++shots_ % long(unshot_.size()) == 0) Resum();
+}
+
+void Solver::Divided(const std::vector<int32_t>& elems) {
+  Grow();
+  for (int32_t p : elems)
+    for (int k = 0; k < kChildren; ++k) b_[mesh_.elems[p].first_child + k] = b_[p];
+  // Fitted to the values as they are now (elements divided in this pass
+  // hold their parent's), so the order of `elems` does not matter.
+  std::vector<glm::dvec3> shaped(kChildren * elems.size());
+  std::vector<int> nb, around;
+  for (size_t i = 0; i < elems.size(); ++i) {
+    const int p = elems[i];
+    const Element& pe = mesh_.elems[p];
+    const glm::dvec3 bp = b_[p];
+    // The parent's neighbours: its children's, less their siblings.
+    around.clear();
+    for (int k = 0; k < kChildren; ++k) {
+      LeafNeighbours(mesh_, pe.first_child + k, &nb);
+      for (int n : nb)
+        if (mesh_.elems[n].parent != p && std::find(around.begin(), around.end(), n) == around.end())
+          around.push_back(n);
+    }
+    // Coordinates in the face's plane, about the children's area centroid.
+    const glm::dvec3 nrm = mesh_.FaceOf(p).normal;
+    glm::dvec3 t1 = mesh_.verts[pe.v[1]] - mesh_.verts[pe.v[0]];
+    t1 = glm::normalize(t1 - nrm * glm::dot(t1, nrm));
+    const glm::dvec3 t2 = glm::cross(nrm, t1);
+    glm::dvec3 cc[kChildren], mean(0.0);
+    double area = 0;
+    for (int k = 0; k < kChildren; ++k) {
+      const int c = pe.first_child + k;
+      cc[k] = mesh_.Centroid(c);
+      mean += mesh_.elems[c].area * cc[k];
+      area += mesh_.elems[c].area;
+    }
+    mean /= area;
+    // Least-squares gradient through the parent's value at `mean`, per
+    // channel; a little damping where the neighbours span one direction.
+    double m11 = 0, m12 = 0, m22 = 0;
+    glm::dvec3 r1(0.0), r2(0.0), lo = bp, hi = bp;
+    for (int n : around) {
+      const glm::dvec3 d = mesh_.Centroid(n) - mean;
+      const double dx = glm::dot(d, t1), dy = glm::dot(d, t2);
+      m11 += dx * dx;
+      m12 += dx * dy;
+      m22 += dy * dy;
+      r1 += dx * (b_[n] - bp);
+      r2 += dy * (b_[n] - bp);
+      lo = glm::min(lo, b_[n]);
+      hi = glm::max(hi, b_[n]);
+    }
+    const double damp = 1e-3 * (m11 + m22);
+    m11 += damp;
+    m22 += damp;
+    const double det = m11 * m22 - m12 * m12;
+    glm::dvec3 gx(0.0), gy(0.0);
+    if (det > 0) {
+      gx = (m22 * r1 - m12 * r2) / det;
+      gy = (m11 * r2 - m12 * r1) / det;
+    }
+    // Limited so that no child leaves the neighbours' range: the same
+    // factor for all children keeps Σ B·area, as Σ area·(c − mean) = 0.
+    glm::dvec3 dev[kChildren], scale(1.0);
+    for (int k = 0; k < kChildren; ++k) {
+      const glm::dvec3 d = cc[k] - mean;
+      dev[k] = gx * glm::dot(d, t1) + gy * glm::dot(d, t2);
+      for (int ch = 0; ch < 3; ++ch) {
+        if (dev[k][ch] > 0) scale[ch] = std::min(scale[ch], (hi[ch] - bp[ch]) / dev[k][ch]);
+        if (dev[k][ch] < 0) scale[ch] = std::min(scale[ch], (lo[ch] - bp[ch]) / dev[k][ch]);
+      }
+    }
+    for (int k = 0; k < kChildren; ++k) shaped[kChildren * i + k] = bp + scale * dev[k];
+  }
+  for (size_t i = 0; i < elems.size(); ++i)
+    for (int k = 0; k < kChildren; ++k)
+      b_[mesh_.elems[elems[i]].first_child + k] = shaped[kChildren * i + k];
 }
 
 double Solver::UnshotFraction() const {
@@ -152,6 +252,18 @@ double ShotAngle(unsigned seed, int patch, int k) {
   return double(z >> 11) * 0x1.0p-53 * 2 * M_PI;
 }
 
+bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wave,
+            std::vector<int32_t>* edits) {
+  edits->clear();
+  if (!subdivider->Due(shots_in_wave)) return false;
+  const double t0 = ThreadCpuSeconds();
+  *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->Ambient(), shots_in_wave);
+  for (int32_t e : *edits) Divide(mesh, e);
+  solver->Divided(*edits);
+  subdivider->CountTime(ThreadCpuSeconds() - t0);
+  return subdivider->WaveOver();
+}
+
 namespace {
 
 // A worker as the scheduler keeps it (paper §4.1): the patches sent and
@@ -173,11 +285,11 @@ struct Slot {
 
 class Scheduler {
  public:
-  Scheduler(const Mesh& mesh, const RunOptions& opts, Solver* solver, Transport* t,
+  Scheduler(Mesh* mesh, const RunOptions& opts, Solver* solver, Subdivider* sub, Transport* t,
             const std::function<void(const Sample&)>& sample,
             const std::function<void(const std::string&, bool)>& note)
-      : mesh_(mesh), opts_(opts), solver_(solver), t_(t), sample_(sample), note_(note),
-        taken_(mesh.patches.size(), 0) {}
+      : mesh_(*mesh), mutable_mesh_(mesh), opts_(opts), solver_(solver), sub_(sub), t_(t),
+        first_(t), sample_(sample), note_(note), taken_(mesh->patches.size(), 0) {}
   RunResult Run();
 
  private:
@@ -190,14 +302,19 @@ class Scheduler {
   void Distribute();
   void Release(Slot* s);
   bool Stop(double unshot);
+  void Subdivide();
+  void NextWave();
   void Emit(double unshot) {
-    if (sample_) sample_({Elapsed(), solver_->shots(), 1, long(mesh_.elems.size()), unshot});
+    if (sample_) sample_({Elapsed(), solver_->shots(), wave_, mesh_.LeafCount(), unshot});
   }
 
   const Mesh& mesh_;
+  Mesh* mutable_mesh_;  // changed only by Subdivide()
   const RunOptions& opts_;
   Solver* solver_;
+  Subdivider* sub_;     // null: no subdivision, one wave
   Transport* t_;
+  Transport* first_;    // the transport given (t_ may become the fallback)
   std::unique_ptr<InProcessTransport> fallback_;
   const std::function<void(const Sample&)>& sample_;
   const std::function<void(const std::string&, bool)>& note_;
@@ -205,8 +322,11 @@ class Scheduler {
   std::vector<Slot> slots_;
   std::deque<proto::Column> ready_;   // columns received, to be shot in order
   double base_ = 0, before_ = 0;      // clock: Elapsed() survives a fallback
-  double best_ = HUGE_VAL;            // stall detection
+  double best_ = HUGE_VAL;            // stall detection, per wave
   long best_at_ = 0;
+  int wave_ = 1;
+  long wave_start_ = 0;               // shots before this wave
+  std::vector<int32_t> edits_;
   RunResult r_;
 };
 
@@ -291,18 +411,15 @@ void Scheduler::Handle(WorkerEvent& ev) {
 void Scheduler::Distribute() {
   bool low = false;
   for (const Slot& s : slots_) low |= s.alive && s.Owned() < size_t(s.low);
-  if (low) {
-    bool more = true;
-    while (more) {
-      more = false;
-      for (Slot& s : slots_) {
-        if (!s.alive || s.Owned() >= size_t(s.high)) continue;
-        const int p = solver_->Select(&taken_);
-        if (p < 0) return;
-        taken_[p] = 1;
-        s.prepared.push_back(p);
-        more = true;
-      }
+  for (bool more = low; more;) {
+    more = false;
+    for (Slot& s : slots_) {
+      if (!s.alive || s.Owned() >= size_t(s.high)) continue;
+      const int p = solver_->Select(&taken_);
+      if (p < 0) break;  // nothing left with power to shoot: send what is prepared
+      taken_[p] = 1;
+      s.prepared.push_back(p);
+      more = true;
     }
   }
   for (size_t w = 0; w < slots_.size(); ++w) {
@@ -358,6 +475,35 @@ bool Scheduler::Stop(double unshot) {
   return true;
 }
 
+// A division pass (paper §4.3) when one is due, only while every worker's
+// queue holds at least its low mark and no column waits to be shot, so
+// that the workers stay busy while the master divides. The edits go to
+// every worker in the order they were made.
+void Scheduler::Subdivide() {
+  if (!sub_ || !ready_.empty()) return;
+  for (const Slot& s : slots_)
+    if (s.alive && !t_->InProcess() && s.Owned() < size_t(s.low)) return;
+  const double t0 = ThreadCpuSeconds();
+  const bool over = Refine(mutable_mesh_, solver_, sub_, solver_->shots() - wave_start_, &edits_);
+  if (!edits_.empty()) t_->Divide(edits_);
+  r_.subdivide_s += ThreadCpuSeconds() - t0;
+  if (over) NextWave();
+}
+
+// The end of a wave (paper §4.4): a picture of it, then the radiosity is
+// thrown away and shooting starts again from the emitters on the finer
+// mesh. Columns in flight are still shot: they are columns of the same
+// geometry.
+void Scheduler::NextWave() {
+  if (opts_.wave_end) opts_.wave_end(wave_);
+  solver_->NewWave();
+  sub_->StartWave(mesh_);
+  ++wave_;
+  wave_start_ = best_at_ = solver_->shots();
+  best_ = HUGE_VAL;
+  Emit(solver_->UnshotFraction());
+}
+
 RunResult Scheduler::Run() {
   // The master's parts are timed in CPU seconds of this thread, so that
   // the figures do not depend on what else runs on the machine; the time
@@ -370,6 +516,10 @@ RunResult Scheduler::Run() {
   Emit(unshot);
   std::vector<WorkerEvent> events;
   for (;;) {
+    if (unshot < opts_.epsilon && sub_ && sub_->WaveOver(true)) {
+      NextWave();
+      unshot = solver_->UnshotFraction();
+    }
     if (Stop(unshot)) break;
     // Wait for workers only when there is nothing to shoot.
     double t0 = ThreadCpuSeconds();
@@ -419,27 +569,32 @@ RunResult Scheduler::Run() {
     unshot = solver_->UnshotFraction();
     r_.shoot_s += since(t0);
     if (solver_->shots() % log_every == 0) Emit(unshot);
+    Subdivide();
+    unshot = solver_->UnshotFraction();
   }
   if (solver_->shots() % log_every != 0) Emit(unshot);  // the last state, once
   r_.shots = solver_->shots();
   r_.seconds = Elapsed();
   r_.unshot = unshot;
-  r_.bytes_sent = t_->BytesSent();
-  r_.bytes_received = t_->BytesReceived();
+  r_.bytes_sent = first_->BytesSent();
+  r_.bytes_received = first_->BytesReceived();
+  r_.waves = wave_;
+  if (sub_) r_.passes = sub_->passes();
   return r_;
 }
 
 }  // namespace
 
-RunResult RunMaster(const Mesh& mesh, const RunOptions& opts, Solver* solver, Transport* transport,
-              const std::function<void(const Sample&)>& sample,
-              const std::function<void(const std::string&, bool)>& note) {
-  Scheduler s(mesh, opts, solver, transport, sample, note);
+RunResult RunMaster(Mesh* mesh, const RunOptions& opts, Solver* solver, Subdivider* subdivider,
+                    Transport* transport, const std::function<void(const Sample&)>& sample,
+                    const std::function<void(const std::string&, bool)>& note) {
+  Scheduler s(mesh, opts, solver, subdivider, transport, sample, note);
   return s.Run();
 }
 
-RunResult RunSequential(const Mesh& mesh, const RunOptions& opts, Solver* solver,
+RunResult RunSequential(Mesh* mesh, const RunOptions& opts, Solver* solver,
+                        Subdivider* subdivider,
                         const std::function<void(const Sample&)>& sample) {
-  InProcessTransport t(mesh, opts.resolution, opts.rotate, opts.seed);
-  return RunMaster(mesh, opts, solver, &t, sample, nullptr);
+  InProcessTransport t(*mesh, opts.resolution, opts.rotate, opts.seed);
+  return RunMaster(mesh, opts, solver, subdivider, &t, sample, nullptr);
 }

@@ -17,6 +17,7 @@
 
 #include "hemicube.h"
 #include "mesh.h"
+#include "subdivide.h"
 
 class Solver {
  public:
@@ -30,8 +31,19 @@ class Solver {
 
   // Shoots patch p along its column. The overshooting estimate is taken
   // here, from the ambient term as it is now (paper §4.2), not when p was
-  // selected.
+  // selected. The column may predate divisions (a worker computed it
+  // before it heard of them): what an element since divided receives goes
+  // to every leaf under it alike.
   void Shoot(int p, const std::vector<FormFactor>& column);
+
+  // Divide() was applied to the mesh for these elements (in this order):
+  // their children get the parent's radiosity shaped by its gradient
+  // (paper §4.4), fitted to the neighbours and limited to their range,
+  // keeping Σ B·area. Unshot radiosity is per patch and stays.
+  void Divided(const std::vector<int32_t>& elems);
+  // A new wave (paper §4.4): all computed radiosity is thrown away and the
+  // solution starts again from the emitters, on the mesh as it is now.
+  void NewWave();
 
   // Σ|unshot|·area / Σ emitted·area, channels summed; 0 for a dark scene.
   double UnshotFraction() const;
@@ -48,9 +60,11 @@ class Solver {
  private:
   glm::dvec3 ToShoot(int p) const;
   void Resum();
+  void Grow();
 
   const Mesh& mesh_;
   bool overshoot_;
+  std::vector<int> leaves_;         // scratch for Shoot
   std::vector<glm::dvec3> b_;       // per element
   std::vector<glm::dvec3> rho_per_area_;  // per element: ρ / A, for Shoot
   std::vector<int32_t> patch_of_;   // per element, compact for Shoot
@@ -78,6 +92,9 @@ struct RunOptions {
   long log_every = 0;       // shots between samples; 0: patches / 100
   int queue = 0;            // patches owned per worker (high mark); 0: automatic
   const volatile std::sig_atomic_t* stop = nullptr;  // set by SIGINT/SIGTERM
+  // Called at the end of every wave but the last (whose end is the run's),
+  // before its radiosity is thrown away. May be empty.
+  std::function<void(int wave)> wave_end;
 };
 
 struct Sample {
@@ -109,26 +126,39 @@ struct RunResult {
   int joined = 0, lost = 0; // workers that joined, that were lost
   bool fell_back = false;   // every worker was lost: the master computed
   uint64_t bytes_sent = 0, bytes_received = 0;
+  long passes = 0;          // division passes
+  int waves = 1;
 };
 
 // The hemicube angle for the k-th shot of patch p: a hash, so that any
 // process computing that column turns the hemicube alike.
 double ShotAngle(unsigned seed, int patch, int k);
 
+// Subdivision between two shots, for any run loop: a division pass if
+// one is due after `shots_in_wave` shots of this wave; the ids it divided,
+// in order, replace *edits (what workers must apply alike). Returns true
+// when the wave is over: the caller ends it (RunOptions::wave_end), then
+// calls solver->NewWave() and subdivider->StartWave(*mesh).
+bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wave,
+            std::vector<int32_t>* edits);
+
 class Transport;
 
 // The master (paper §4): selects patches into per-worker queues, keeps
-// the workers busy, shoots the columns they return, stops by the rules
-// of RunOptions. Drives any Transport; an InProcessTransport gives the
-// sequential algorithm. `sample` (may be empty) is called every log_every
-// shots and once at the end; `note` (may be empty) gets one line when a
-// worker joins, or, as a warning, when one is lost.
-RunResult RunMaster(const Mesh& mesh, const RunOptions& opts, Solver* solver, Transport* transport,
-              const std::function<void(const Sample&)>& sample,
-              const std::function<void(const std::string&, bool warning)>& note);
+// the workers busy, shoots the columns they return, divides elements
+// between shots (subdivider may be null: the mesh stays, one wave) and
+// sends the edits to the workers, stops by the rules of RunOptions.
+// Drives any Transport; an InProcessTransport gives the sequential
+// algorithm. `sample` (may be empty) is called every log_every shots and
+// once at the end; `note` (may be empty) gets one line when a worker
+// joins, or, as a warning, when one is lost.
+RunResult RunMaster(Mesh* mesh, const RunOptions& opts, Solver* solver, Subdivider* subdivider,
+                    Transport* transport, const std::function<void(const Sample&)>& sample,
+                    const std::function<void(const std::string&, bool warning)>& note);
 
 // RunMaster() with the master's own process as the only worker.
-RunResult RunSequential(const Mesh& mesh, const RunOptions& opts, Solver* solver,
+RunResult RunSequential(Mesh* mesh, const RunOptions& opts, Solver* solver,
+                        Subdivider* subdivider,
                         const std::function<void(const Sample&)>& sample);
 
 #endif

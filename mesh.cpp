@@ -262,9 +262,12 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
   return true;
 }
 
-void Mesh::Leaves(int patch, std::vector<int>* out) const {
+namespace {
+
+// Depth first from the ids on `stack` (the last one first), children in order.
+void CollectLeaves(const std::vector<Element>& elems, std::vector<int> stack,
+                   std::vector<int>* out) {
   out->clear();
-  std::vector<int> stack(patches[patch].elements.rbegin(), patches[patch].elements.rend());
   while (!stack.empty()) {
     int e = stack.back();
     stack.pop_back();
@@ -276,10 +279,206 @@ void Mesh::Leaves(int patch, std::vector<int>* out) const {
   }
 }
 
+}  // namespace
+
+void Mesh::Leaves(int patch, std::vector<int>* out) const {
+  CollectLeaves(elems, {patches[patch].elements.rbegin(), patches[patch].elements.rend()}, out);
+}
+
+void Mesh::LeavesUnder(int elem, std::vector<int>* out) const {
+  CollectLeaves(elems, {elem}, out);
+}
+
 glm::dvec3 Mesh::Centroid(int elem) const {
   const Element& e = elems[elem];
   int n = e.IsTriangle() ? 3 : 4;
   glm::dvec3 c(0.0);
   for (int k = 0; k < n; ++k) c += verts[e.v[k]];
   return c / double(n);
+}
+
+namespace {
+
+int Corners(const Element& e) { return e.IsTriangle() ? 3 : 4; }
+
+uint64_t Undirected(int a, int b) { return a < b ? EdgeKey(a, b) : EdgeKey(b, a); }
+
+int Find(const std::unordered_map<uint64_t, int>& m, uint64_t key) {
+  auto it = m.find(key);
+  return it == m.end() ? -1 : it->second;
+}
+
+void Own(Mesh* m, int elem, bool add) {
+  const Element& e = m->elems[elem];
+  for (int k = 0, n = Corners(e); k < n; ++k) {
+    const uint64_t key = EdgeKey(e.v[k], e.v[(k + 1) % n]);
+    if (add) m->owner[key] = elem;
+    else m->owner.erase(key);
+  }
+}
+
+Segment Seg(const Mesh& m, int a, int b) {
+  const glm::dvec3 &p = m.verts[a], &q = m.verts[b];
+  return LexLess(p, q) ? Segment(p, q) : Segment(q, p);
+}
+
+// Adds `elem`'s edges that have no neighbour in its face to Mesh::border,
+// or takes all its edges out.
+void Border(Mesh* m, int elem, bool add) {
+  const Element& e = m->elems[elem];
+  for (int k = 0, n = Corners(e); k < n; ++k) {
+    const int p = e.v[k], q = e.v[(k + 1) % n];
+    if (!add) {
+      auto it = m->border.find(Seg(*m, p, q));
+      if (it == m->border.end()) continue;
+      auto& v = it->second;
+      v.erase(std::remove(v.begin(), v.end(), elem), v.end());
+      if (v.empty()) m->border.erase(it);
+    } else if (Find(m->owner, EdgeKey(q, p)) < 0) {
+      m->border[Seg(*m, p, q)].push_back(elem);
+    }
+  }
+}
+
+// Element n's edge (p, q) (its own vertex ids) becomes home to T-vertex v.
+void SetMid(Element* n, int p, int q, int v) {
+  for (int k = 0, c = Corners(*n); k < c; ++k)
+    if (n->v[k] == p && n->v[(k + 1) % c] == q) n->mid[k] = v;
+}
+
+int NewMidpoint(Mesh* m, int face, int a, int b, const glm::dvec3& p) {
+  const int v = int(m->verts.size());
+  m->verts.push_back(p);
+  m->faces[face].divide_verts.push_back(v);
+  m->midpoint.emplace(Undirected(a, b), v);
+  m->split.emplace(v, Undirected(a, b));
+  return v;
+}
+
+// The midpoint of edge a -> b of an element of face `face`: the one a
+// neighbour made, or a new vertex, which the neighbour across the edge (if
+// it is a leaf with that very edge) then holds as a T-vertex; so do leaves
+// of other faces along the same edge, with a copy of their own.
+int Midpoint(Mesh* m, int face, int a, int b) {
+  if (int v = Find(m->midpoint, Undirected(a, b)); v >= 0) return v;
+  const glm::dvec3 p = EdgePoint(m->verts[a], m->verts[b], 1, 2);
+  const int v = NewMidpoint(m, face, a, b, p);
+  if (int n = Find(m->owner, EdgeKey(b, a)); n >= 0) {
+    SetMid(&m->elems[n], b, a, v);
+    return v;
+  }
+  auto it = m->border.find(Seg(*m, a, b));
+  if (it == m->border.end()) return v;
+  // Copies: NewMidpoint() below grows (and may move) m->verts.
+  const glm::dvec3 pa = m->verts[a], pb = m->verts[b];
+  for (int n : it->second) {
+    Element& ne = m->elems[n];
+    const int nf = m->patches[ne.patch].face;
+    if (nf == face || !ne.IsLeaf()) continue;
+    for (int k = 0, c = Corners(ne); k < c; ++k) {
+      const int x = ne.v[k], y = ne.v[(k + 1) % c];
+      const glm::dvec3 px = m->verts[x], py = m->verts[y];
+      if (ne.mid[k] >= 0 || !((px == pa && py == pb) || (px == pb && py == pa))) continue;
+      ne.mid[k] = NewMidpoint(m, nf, x, y, p);
+    }
+  }
+  return v;
+}
+
+}  // namespace
+
+void ConnectEdges(Mesh* mesh) {
+  if (mesh->connected) return;
+  mesh->connected = true;
+  for (size_t e = 0; e < mesh->elems.size(); ++e)
+    if (mesh->elems[e].IsLeaf()) Own(mesh, int(e), true);
+  for (size_t e = 0; e < mesh->elems.size(); ++e)
+    if (mesh->elems[e].IsLeaf()) Border(mesh, int(e), true);
+}
+
+void Divide(Mesh* mesh, int32_t elem) {
+  ConnectEdges(mesh);
+  CHECK(elem >= 0 && size_t(elem) < mesh->elems.size() && mesh->elems[elem].IsLeaf());
+  const Element parent = mesh->elems[elem];
+  const int face = mesh->patches[parent.patch].face;
+  const int n = Corners(parent);
+  int mid[4];
+  for (int k = 0; k < n; ++k) mid[k] = Midpoint(mesh, face, parent.v[k], parent.v[(k + 1) % n]);
+  const std::array<int, 4>& v = parent.v;
+  std::array<std::array<int, 4>, kChildren> kids;
+  if (n == 3) {
+    kids = {{{v[0], mid[0], mid[2], -1}, {mid[0], v[1], mid[1], -1},
+             {mid[2], mid[1], v[2], -1}, {mid[0], mid[1], mid[2], -1}}};
+  } else {
+    const int c = int(mesh->verts.size());
+    const auto& p = mesh->verts;
+    mesh->verts.push_back(0.25 * (p[v[0]] + p[v[1]] + p[v[2]] + p[v[3]]));
+    mesh->faces[face].divide_verts.push_back(c);
+    kids = {{{v[0], mid[0], c, mid[3]}, {mid[0], v[1], mid[1], c},
+             {c, mid[1], v[2], mid[2]}, {mid[3], c, mid[2], v[3]}}};
+  }
+  Own(mesh, elem, false);
+  Border(mesh, elem, false);
+  ++mesh->divided;
+  const int first = int(mesh->elems.size());
+  mesh->elems[elem].first_child = first;
+  for (const auto& kv : kids) {
+    Element child;
+    child.v = kv;
+    child.patch = parent.patch;
+    child.parent = elem;
+    child.level = parent.level + 1;
+    child.area = PolyArea(*mesh, child);
+    // A neighbour already finer than the parent by two levels leaves a
+    // T-vertex on the child's edge (the subdivision policy avoids it).
+    for (int k = 0; k < n; ++k)
+      child.mid[k] = Find(mesh->midpoint, Undirected(kv[k], kv[(k + 1) % n]));
+    mesh->elems.push_back(child);
+    Own(mesh, int(mesh->elems.size()) - 1, true);
+  }
+  for (int k = 0; k < kChildren; ++k) Border(mesh, first + k, true);
+}
+
+int Outline(const Element& e, int out[8]) {
+  int ids[8], n = 0, from = -1;
+  for (int k = 0; k < Corners(e); ++k) {
+    ids[n++] = e.v[k];
+    if (e.mid[k] < 0) continue;
+    if (from < 0) from = n;
+    ids[n++] = e.mid[k];
+  }
+  if (from < 0) from = 0;
+  for (int i = 0; i < n; ++i) out[i] = ids[(from + i) % n];
+  return n;
+}
+
+void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out) {
+  out->clear();
+  const Element& e = mesh.elems[elem];
+  auto add = [&](int a, int b) {
+    int n = Find(mesh.owner, EdgeKey(a, b));
+    if (n >= 0 && std::find(out->begin(), out->end(), n) == out->end()) out->push_back(n);
+    return n >= 0;
+  };
+  for (int k = 0, c = Corners(e); k < c; ++k) {
+    const int p = e.v[k], q = e.v[(k + 1) % c];
+    if (add(q, p)) continue;               // alike
+    if (e.mid[k] >= 0) {                   // finer, across a T-vertex
+      add(q, e.mid[k]);
+      add(e.mid[k], p);
+      continue;
+    }
+    // Coarser: p -> q is half of the neighbour's edge, split at p or q.
+    for (int s : {p, q}) {
+      auto it = mesh.split.find(s);
+      if (it == mesh.split.end()) continue;
+      const int r0 = int(it->second >> 32), r1 = int(uint32_t(it->second));
+      const int other = s == p ? q : p;
+      if (other != r0 && other != r1) continue;
+      // Our way along the coarse edge runs from `from` to `to`.
+      const int far = other == r0 ? r1 : r0;
+      const int from = s == p ? far : other, to = s == p ? other : far;
+      add(to, from);
+    }
+  }
 }

@@ -10,20 +10,25 @@
 // common edge produce bit-identical points and the hemicube sees no cracks.
 //
 // The hierarchy is plain data (ids into flat arrays) so that run-time
-// subdivision can append children and ship the same edits to workers.
+// subdivision can append children and ship the same edits to workers:
+// Divide() is deterministic, so the same sequence of divisions applied to
+// two equal meshes leaves them equal, element and vertex ids included.
 #ifndef RADIOSITY_MESH_H
 #define RADIOSITY_MESH_H
 
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <glm/glm.hpp>
 
 #include "scene.h"
 
-// A divided element has kChildren consecutive children (2 x 2).
+// A divided element has kChildren consecutive children: a quad 2 x 2 by
+// its edge midpoints and centre, a triangle into four by its edge midpoints.
 constexpr int kChildren = 4;
 
 struct Element {
@@ -33,6 +38,10 @@ struct Element {
   int first_child = -1;                    // -1: a leaf (a receiver)
   int level = 0;
   double area = 0.0;
+  // mid[k] >= 0: a finer neighbour put a vertex at the midpoint of edge
+  // v[k] -> v[k+1] (a T-vertex). Drawn as a corner of this element too, so
+  // that the hemicube sees no crack and shading no seam along the edge.
+  std::array<int, 4> mid{{-1, -1, -1, -1}};
   bool IsTriangle() const { return v[3] < 0; }
   bool IsLeaf() const { return first_child < 0; }
 };
@@ -53,6 +62,7 @@ struct MeshFace {
   double area = 0.0;
   double offset = 0.0;           // plane: dot(normal, x) == offset
   int vbegin = 0, vend = 0;      // its vertices: Mesh::verts[vbegin, vend)
+  std::vector<int> divide_verts; // and those Divide() added since
   std::vector<int> patches;
 };
 
@@ -62,6 +72,15 @@ struct PointHash {
   size_t operator()(const glm::dvec3& p) const {
     std::hash<double> h;
     return h(p.x) * 0x9E3779B97F4A7C15ull ^ h(p.y) * 0xC2B2AE3D27D4EB4Full ^ h(p.z);
+  }
+};
+
+// A segment by its end points in lexicographic order: an edge that faces
+// (with their own vertex ids) share.
+using Segment = std::pair<glm::dvec3, glm::dvec3>;
+struct SegmentHash {
+  size_t operator()(const Segment& s) const {
+    return PointHash()(s.first) * 31 ^ PointHash()(s.second);
   }
 };
 
@@ -81,8 +100,23 @@ struct Mesh {
   double patch_size = 0.0;     // as used
   double scene_diagonal = 0.0; // bounding-box diagonal, the scene's scale
 
+  // Kept by Divide(), keyed by a vertex id pair (EdgeKey; vertex ids are
+  // per face, so these never join two faces):
+  std::unordered_map<uint64_t, int> midpoint;  // undirected edge -> its midpoint
+  std::unordered_map<int, uint64_t> split;     // midpoint -> its undirected edge
+  std::unordered_map<uint64_t, int> owner;     // directed edge -> the leaf with it,
+  // Leaves with an edge on their face's border, by the edge's points: the
+  // neighbours in other faces, which get a copy of a midpoint made there.
+  std::unordered_map<Segment, std::vector<int>, SegmentHash> border;
+  bool connected = false;                      // once ConnectEdges() ran
+  int divided = 0;                             // Divide() calls so far
+
+  long LeafCount() const { return long(elems.size()) - divided; }
+
   // Leaf elements of a patch, in a stable order.
   void Leaves(int patch, std::vector<int>* out) const;
+  // Leaf elements under element `elem` (itself when it is a leaf).
+  void LeavesUnder(int elem, std::vector<int>* out) const;
   const MeshFace& FaceOf(int elem) const { return faces[patches[elems[elem].patch].face]; }
   glm::dvec3 Centroid(int elem) const;
 };
@@ -93,5 +127,30 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
                std::string* err);
 
 constexpr int kMaxElements = 20'000'000;
+
+// Divides leaf element `elem` into kChildren children appended to
+// mesh->elems. Midpoints are computed from their edge's endpoints in the
+// canonical order (bit-identical from either side, and to a neighbouring
+// face cut alike) and reused when a neighbour made them first; a leaf of
+// another face along the same edge gets its own copy of the point (faces
+// share no vertices) as a T-vertex.
+void Divide(Mesh* mesh, int32_t elem);
+
+// Fills Mesh::owner for the leaves (once; Divide() keeps it since). Not
+// done by BuildMesh: a run without subdivision needs no adjacency.
+void ConnectEdges(Mesh* mesh);
+
+// The key of the edge a -> b: directed (a, b) or undirected (min, max).
+inline uint64_t EdgeKey(int a, int b) { return uint64_t(uint32_t(a)) << 32 | uint32_t(b); }
+
+// The outline of element `e`: its corners and the T-vertices on its
+// edges, counter-clockwise, from its first T-vertex if it has one (so a
+// fan from out[0] has no degenerate triangle). Returns the count, <= 8.
+int Outline(const Element& e, int out[8]);
+
+// Leaf elements of the same face sharing a piece of an edge with leaf
+// `elem`: alike, finer (across a T-vertex) or coarser. Needs
+// ConnectEdges().
+void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out);
 
 #endif

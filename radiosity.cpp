@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <unistd.h>
 
@@ -21,6 +22,7 @@
 #include "scene.h"
 #include "transport.h"
 #include "worker.h"
+#include "subdivide.h"
 
 #ifndef RADIOSITY_VERSION
 #define RADIOSITY_VERSION "0.1"
@@ -55,6 +57,12 @@ const char kUsage[] =
     "      --reference CSV    log RMS error against a converged result.csv\n"
     "      --patch-size L     largest patch edge (default: scene diagonal / 16)\n"
     "      --elements N       elements per patch edge (default 2)\n"
+    "      --no-subdivide     keep the mesh as built (default: divide where light changes)\n"
+    "      --no-waves         one wave: never restart on the finer mesh\n"
+    "      --subdivide-floor F  lowest dividing-factor threshold (default 0.2)\n"
+    "      --min-element L    smallest element edge made by dividing (default: diagonal / 400)\n"
+    "      --max-level N      deepest division below the built elements, 0..12 (default 2)\n"
+    "      --wave-fraction F  a new wave after F of the elements divided (default 0.2)\n"
     "      --no-rotate        keep the hemicube aligned (default: turned per shot)\n"
     "      --seed N           seed of the hemicube turns (default 1)\n"
     "      --log-every N      shots between log.csv rows (default: patches / 100)\n"
@@ -136,6 +144,7 @@ int main(int argc, char** argv) {
   enum {
     kNoOvershoot = 256, kReference, kPatchSize, kElements, kNoRotate, kSeed,
     kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
+    kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
   };
   static const option kLong[] = {
       {"out", required_argument, nullptr, 'o'},
@@ -152,6 +161,12 @@ int main(int argc, char** argv) {
       {"reference", required_argument, nullptr, kReference},
       {"patch-size", required_argument, nullptr, kPatchSize},
       {"elements", required_argument, nullptr, kElements},
+      {"no-subdivide", no_argument, nullptr, kNoSubdivide},
+      {"no-waves", no_argument, nullptr, kNoWaves},
+      {"subdivide-floor", required_argument, nullptr, kFloor},
+      {"min-element", required_argument, nullptr, kMinElement},
+      {"max-level", required_argument, nullptr, kMaxLevel},
+      {"wave-fraction", required_argument, nullptr, kWaveFraction},
       {"no-rotate", no_argument, nullptr, kNoRotate},
       {"seed", required_argument, nullptr, kSeed},
       {"log-every", required_argument, nullptr, kLogEvery},
@@ -167,6 +182,8 @@ int main(int argc, char** argv) {
   std::string out_dir = "out", reference, camera_text, format = "png";
   RunOptions run;
   MeshOptions mesh_opts;
+  SubdivideOptions sub_opts;
+  bool subdivide = true;
   int width = 512, height = 512, verbosity = 1;
   long workers = std::max(1L, sysconf(_SC_NPROCESSORS_ONLN));
   bool worker_mode = false;
@@ -194,6 +211,12 @@ int main(int argc, char** argv) {
       case kReference: reference = optarg; break;
       case kPatchSize: mesh_opts.patch_size = Number("--patch-size", optarg, 1e-300, 1e300); break;
       case kElements: mesh_opts.elements_per_patch = int(Integer("--elements", optarg, 1, 64)); break;
+      case kNoSubdivide: subdivide = false; break;
+      case kNoWaves: sub_opts.waves = false; break;
+      case kFloor: sub_opts.floor = Number("--subdivide-floor", optarg, 1e-3, 100); break;
+      case kMinElement: sub_opts.min_size = Number("--min-element", optarg, 1e-300, 1e300); break;
+      case kMaxLevel: sub_opts.max_level = int(Integer("--max-level", optarg, 0, 12)); break;
+      case kWaveFraction: sub_opts.wave_fraction = Number("--wave-fraction", optarg, 0.01, 1); break;
       case kNoRotate: run.rotate = false; break;
       case kSeed: run.seed = unsigned(Integer("--seed", optarg, 0, 0xFFFFFFFFL)); break;
       case kLogEvery: run.log_every = Integer("--log-every", optarg, 1, 1L << 50); break;
@@ -272,6 +295,26 @@ int main(int argc, char** argv) {
   if (solver.Dark())  // a legal scene, but most likely a missing Ke
     std::fprintf(stderr, "radiosity: warning: %s: no face emits light (Ke); every B is 0\n",
                  scene_path.c_str());
+  // A picture of the solution as it stands: the end of a wave, the final one.
+  auto picture = [&](const std::string& path) {
+    ShadedMesh shaded = Shade(mesh, solver.radiosity());
+    Image img;
+    Render(shaded, camera, width, height, &img);
+    if (!WriteImage(img, AutoExposure(shaded), path, format, &err)) Die(kExitFailure, err);
+    return shaded;
+  };
+  auto frame = [&](int wave) {
+    char name[32];
+    std::snprintf(name, sizeof name, "/frame-%02d.", wave);
+    picture(out_dir + name + format);
+    if (verbosity >= 2)
+      std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", wave, mesh.LeafCount());
+  };
+  run.wave_end = frame;
+  sub_opts.threshold = std::max(sub_opts.threshold, sub_opts.floor);
+  std::unique_ptr<Subdivider> subdivider;
+  if (subdivide) subdivider = std::make_unique<Subdivider>(&mesh, sub_opts);
+  const long built = mesh.LeafCount();
   std::unique_ptr<Transport> transport;
   if (workers == 0) {
     transport = std::make_unique<InProcessTransport>(mesh, run.resolution, run.rotate, run.seed);
@@ -299,7 +342,8 @@ int main(int argc, char** argv) {
   auto note = [&](const std::string& line, bool warning) {
     if (warning || verbosity >= 2) std::fprintf(stderr, "radiosity: %s\n", line.c_str());
   };
-  RunResult result = RunMaster(mesh, run, &solver, transport.get(), sample, note);
+  RunResult result =
+      RunMaster(&mesh, run, &solver, subdivider.get(), transport.get(), sample, note);
   transport->Shutdown();
   if (verbosity >= 2)
     std::fprintf(stderr,
@@ -320,14 +364,10 @@ int main(int argc, char** argv) {
                           result.why + "; no results written");
 
   std::vector<glm::dvec3> face_b = FaceRadiosity(mesh, solver.radiosity());
-  ShadedMesh shaded = Shade(mesh, solver.radiosity());
-  const float exposure = AutoExposure(shaded);
-  Image img;
-  Render(shaded, camera, width, height, &img);
-  const std::string picture = out_dir + "/final." + format;
-  if (!WriteResultCsv(out_dir + "/result.csv", scene, face_b, &err) ||
-      !WriteImage(img, exposure, picture, format, &err) ||
-      !WritePly(shaded, exposure, out_dir + "/result.ply", &err))
+  if (!WriteResultCsv(out_dir + "/result.csv", scene, face_b, &err)) Die(kExitFailure, err);
+  frame(result.waves);
+  ShadedMesh shaded = picture(out_dir + "/final." + format);
+  if (!WritePly(shaded, AutoExposure(shaded), out_dir + "/result.ply", &err))
     Die(kExitFailure, err);
 
   if (result.status == RunStatus::kLimit)  // said even with -q: these are not converged numbers
@@ -341,9 +381,11 @@ int main(int argc, char** argv) {
                                                              : result.why.c_str();
     std::fprintf(stderr,
                  "radiosity: %s: %ld shots in %.2f s, unshot %.3g of emitted; "
-                 "%zu patches, %zu elements; results in %s/\n",
+                 "%zu patches, %ld elements (%ld built; %d waves, %ld division passes "
+                 "in %.3f s); results in %s/\n",
                  how, result.shots, result.seconds, result.unshot, mesh.patches.size(),
-                 mesh.elems.size(), out_dir.c_str());
+                 mesh.LeafCount(), built, result.waves, result.passes, result.subdivide_s,
+                 out_dir.c_str());
   }
   return kExitOk;
 }

@@ -1,10 +1,13 @@
 #include "results.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <unordered_map>
+
+#include "check.h"
 
 std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   std::vector<glm::dvec3> sum(mesh.faces.size(), glm::dvec3(0.0));
@@ -179,10 +182,20 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   s.positions = mesh.verts;
   std::vector<glm::dvec3> sum(mesh.verts.size(), glm::dvec3(0.0));
   std::vector<double> w(mesh.verts.size(), 0.0);
+  std::vector<int> t_leaves;  // leaves with T-vertices on their edges
   for (size_t e = 0; e < mesh.elems.size(); ++e) {
     const Element& el = mesh.elems[e];
     if (!el.IsLeaf()) continue;
-    s.polys.push_back(el.v);
+    // Drawn as a fan over its outline: where finer neighbours meet it,
+    // it meets their edges exactly (no pixel cracks).
+    int out[8];
+    const int m = Outline(el, out);
+    if (m == (el.IsTriangle() ? 3 : 4)) {
+      s.polys.push_back(el.v);
+    } else {
+      t_leaves.push_back(int(e));
+      for (int i = 1; i + 1 < m; ++i) s.polys.push_back({out[0], out[i], out[i + 1], -1});
+    }
     const glm::dvec3 b = glm::max(elem_b[e], glm::dvec3(0.0));
     for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
       sum[el.v[k]] += b * el.area;
@@ -208,14 +221,17 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   };
   std::unordered_map<Key, int, Hash> group_of;
   std::vector<int> group(mesh.verts.size());
-  for (const MeshFace& f : mesh.faces)
-    for (int v = f.vbegin; v < f.vend; ++v) {
+  for (const MeshFace& f : mesh.faces) {
+    auto join = [&](int v) {
       Key k{mesh.verts[v],
             {std::llround(f.normal.x * 1e6), std::llround(f.normal.y * 1e6),
              std::llround(f.normal.z * 1e6)},
             f.material};
       group[v] = group_of.emplace(k, int(group_of.size())).first->second;
-    }
+    };
+    for (int v = f.vbegin; v < f.vend; ++v) join(v);
+    for (int v : f.divide_verts) join(v);
+  }
   std::vector<glm::dvec3> gsum(group_of.size(), glm::dvec3(0.0));
   std::vector<double> gw(group_of.size(), 0.0);
   for (size_t v = 0; v < sum.size(); ++v) {
@@ -225,5 +241,97 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   s.colors.resize(mesh.verts.size(), glm::vec3(0.0f));
   for (size_t v = 0; v < sum.size(); ++v)
     if (gw[group[v]] > 0) s.colors[v] = glm::vec3(gsum[group[v]] / gw[group[v]]);
+  // A T-vertex takes the value interpolated along the coarser edge it lies
+  // on, so both sides shade that edge alike (no seam); so do the vertices
+  // joined with it across coplanar faces. Coarser first: a corner of a
+  // finer element may itself be a T-vertex of a coarser one.
+  std::stable_sort(t_leaves.begin(), t_leaves.end(),
+                   [&](int a, int b) { return mesh.elems[a].level < mesh.elems[b].level; });
+  std::vector<glm::vec3> on_edge(group_of.size());
+  std::vector<char> is_t(group_of.size(), 0);
+  auto color = [&](int v) { return is_t[group[v]] ? on_edge[group[v]] : s.colors[v]; };
+  for (int e : t_leaves) {
+    const Element& el = mesh.elems[e];
+    const int n = el.IsTriangle() ? 3 : 4;
+    for (int k = 0; k < n; ++k)
+      if (el.mid[k] >= 0) {
+        on_edge[group[el.mid[k]]] = 0.5f * (color(el.v[k]) + color(el.v[(k + 1) % n]));
+        is_t[group[el.mid[k]]] = 1;
+      }
+  }
+  for (size_t v = 0; v < s.colors.size(); ++v)
+    if (is_t[group[v]]) s.colors[v] = on_edge[group[v]];
   return s;
+}
+
+namespace {
+
+// Signed twice-area of (a, b, x) about the normal n.
+double Side(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& x, const glm::dvec3& n) {
+  return glm::dot(glm::cross(b - a, x - a), n);
+}
+
+// The radiosity as drawn at point x of leaf e: interpolated over the fan
+// triangle of its outline that holds x best (all weights >= 0 but for
+// rounding), as Render does.
+glm::dvec3 Drawn(const Mesh& mesh, const ShadedMesh& shaded, int e, const glm::dvec3& x,
+                 const glm::dvec3& n) {
+  int out[8];
+  const int m = Outline(mesh.elems[e], out);
+  glm::dvec3 value(0.0);
+  double best = -HUGE_VAL;
+  for (int i = 1; i + 1 < m; ++i) {
+    const int t[3] = {out[0], out[i], out[i + 1]};
+    double w[3];
+    for (int k = 0; k < 3; ++k) w[k] = Side(mesh.verts[t[(k + 1) % 3]], mesh.verts[t[(k + 2) % 3]], x, n);
+    const double sum = std::max(1e-300, w[0] + w[1] + w[2]);
+    const double lo = std::min({w[0], w[1], w[2]}) / sum;
+    if (lo <= best) continue;
+    best = lo;
+    value = glm::dvec3(0.0);
+    for (int k = 0; k < 3; ++k) value += std::max(0.0, w[k]) * glm::dvec3(shaded.colors[t[k]]);
+    value /= std::max(1e-300, std::max(0.0, w[0]) + std::max(0.0, w[1]) + std::max(0.0, w[2]));
+  }
+  return value;
+}
+
+}  // namespace
+
+void FieldError(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const Mesh& ref,
+                const std::vector<glm::dvec3>& ref_b, double* rms, double* rel_rms) {
+  CHECK(mesh.patches.size() == ref.patches.size());
+  const ShadedMesh shaded = Shade(mesh, elem_b), ref_shaded = Shade(ref, ref_b);
+  const double tol = 1e-12 * mesh.scene_diagonal * mesh.scene_diagonal;
+  auto inside = [&](int e, const glm::dvec3& x, const glm::dvec3& n) {
+    const Element& el = mesh.elems[e];
+    const int c = el.IsTriangle() ? 3 : 4;
+    for (int k = 0; k < c; ++k)
+      if (Side(mesh.verts[el.v[k]], mesh.verts[el.v[(k + 1) % c]], x, n) < -tol) return false;
+    return true;
+  };
+  double se = 0, area = 0, mean = 0;
+  for (size_t r = 0; r < ref.elems.size(); ++r) {
+    const Element& rel = ref.elems[r];
+    if (!rel.IsLeaf()) continue;
+    const glm::dvec3 x = ref.Centroid(int(r));
+    const glm::dvec3 n = ref.FaceOf(int(r)).normal;
+    // Patches are cut alike, so the point lies under the same patch here.
+    int e = -1;
+    for (int top : mesh.patches[rel.patch].elements)
+      if (inside(top, x, n)) { e = top; break; }
+    if (e < 0) e = mesh.patches[rel.patch].elements[0];  // rounding at an edge
+    while (!mesh.elems[e].IsLeaf()) {
+      int next = mesh.elems[e].first_child;
+      for (int k = 0; k < kChildren; ++k)
+        if (inside(mesh.elems[e].first_child + k, x, n)) { next = mesh.elems[e].first_child + k; break; }
+      e = next;
+    }
+    const glm::dvec3 want = Drawn(ref, ref_shaded, int(r), x, n);
+    const glm::dvec3 d = Drawn(mesh, shaded, e, x, n) - want;
+    se += rel.area * glm::dot(d, d) / 3;
+    mean += rel.area * (want.r + want.g + want.b) / 3;
+    area += rel.area;
+  }
+  *rms = area > 0 ? std::sqrt(se / area) : 0;
+  *rel_rms = mean > 0 ? *rms / (mean / area) : 0;
 }

@@ -32,6 +32,16 @@ bool ReadReference(const std::string& path, const Scene& scene,
 void RmsError(const Scene& scene, const std::vector<glm::dvec3>& face_b,
               const std::vector<glm::dvec3>& ref, double* rms, double* rel_rms);
 
+// The same RMS error measured per point instead of per face, so that it
+// sees how well the mesh follows shadows and light edges (a face's mean
+// does not depend on how its elements are cut): at the centroid of every
+// leaf of `ref` (a finer converged solution of the same scene and patch
+// size), the radiosity as drawn (Shade, interpolated over the leaf's
+// triangles as Render does) against the reference as drawn, weighted by
+// the leaf's area.
+void FieldError(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const Mesh& ref,
+                const std::vector<glm::dvec3>& ref_b, double* rms, double* rel_rms);
+
 // log.csv, a row per progress sample.
 class LogCsv {
  public:

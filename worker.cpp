@@ -157,6 +157,20 @@ bool Worker::Handle(proto::Msg type, const std::string& payload, int* status,
       if (!why.empty()) break;
       return true;
     }
+    case proto::Msg::kDivide: {
+      std::vector<int32_t> elems;
+      if (!proto::DecodeDivide(payload, &elems, &why)) break;
+      for (int32_t e : elems) {
+        // Divide() CHECKs these; from the wire they are input, not invariants.
+        if (e < 0 || size_t(e) >= mesh_.elems.size() || !mesh_.elems[e].IsLeaf()) {
+          why = "cannot divide element " + std::to_string(e);
+          break;
+        }
+        Divide(&mesh_, e);
+      }
+      if (!why.empty()) break;
+      return true;
+    }
     case proto::Msg::kHeartbeat: return true;
     case proto::Msg::kBye: *status = 0; return false;
     case proto::Msg::kError: {

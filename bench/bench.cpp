@@ -26,7 +26,7 @@ struct ToTarget {
 
 // Shots to reach rel RMS <= target (sampled every shot), then the same run
 // again without sampling to time it.
-ToTarget Reach(const Scene& scene, const Mesh& mesh, int res, bool overshoot,
+ToTarget Reach(const Scene& scene, Mesh* mesh, int res, bool overshoot,
                const std::vector<glm::dvec3>& ref, double target) {
   ToTarget t;
   RunOptions o;
@@ -34,13 +34,13 @@ ToTarget Reach(const Scene& scene, const Mesh& mesh, int res, bool overshoot,
   o.overshoot = overshoot;
   o.epsilon = 1e-12;
   o.log_every = 1;
-  o.max_shots = 200 * long(mesh.patches.size());
+  o.max_shots = 200 * long(mesh->patches.size());
   volatile std::sig_atomic_t stop = 0;
   o.stop = &stop;
-  Solver s(mesh, overshoot);
-  RunSequential(mesh, o, &s, [&](const Sample& smp) {
+  Solver s(*mesh, overshoot);
+  RunSequential(mesh, o, &s, nullptr, [&](const Sample& smp) {
     double rms, rel;
-    RmsError(scene, FaceRadiosity(mesh, s.radiosity()), ref, &rms, &rel);
+    RmsError(scene, FaceRadiosity(*mesh, s.radiosity()), ref, &rms, &rel);
     if (rel <= target && !stop) {
       t.shots = smp.shots;
       stop = 1;
@@ -50,8 +50,8 @@ ToTarget Reach(const Scene& scene, const Mesh& mesh, int res, bool overshoot,
   o.log_every = 1L << 40;
   o.max_shots = std::max(1L, t.shots);
   o.stop = nullptr;
-  Solver s2(mesh, overshoot);
-  RunResult r = RunSequential(mesh, o, &s2, nullptr);
+  Solver s2(*mesh, overshoot);
+  RunResult r = RunSequential(mesh, o, &s2, nullptr, nullptr);
   t.seconds = r.seconds;
   t.master_per_shot_us = 1e6 * (r.distribute_s + r.shoot_s) / std::max(1L, r.shots);
   return t;
@@ -104,10 +104,10 @@ int main(int argc, char** argv) {
     o.resolution = res;
     o.epsilon = 1e-6;
     Solver ref_solver(mesh, true);
-    RunResult rr = RunSequential(mesh, o, &ref_solver, nullptr);
+    RunResult rr = RunSequential(&mesh, o, &ref_solver, nullptr, nullptr);
     std::vector<glm::dvec3> ref = FaceRadiosity(mesh, ref_solver.radiosity());
     for (bool over : {true, false}) {
-      ToTarget t = Reach(scene, mesh, res, over, ref, 0.01);
+      ToTarget t = Reach(scene, &mesh, res, over, ref, 0.01);
       std::printf("converge | %s | %d | %s | %ld | %.3f | %.1f | %ld | %.1f\n", name.c_str(), res,
                   over ? "overshooting" : "plain", t.shots, t.seconds, t.master_per_shot_us,
                   rr.shots, rr.seconds);

@@ -52,6 +52,7 @@ if [ "$what" = all ] || [ "$what" = engine ]; then
   echo
   echo "CSV: $out_columns $out_converge"
   echo
+  sh bench/waves.sh
 fi
 
 case $what in

@@ -9,11 +9,11 @@
 
 namespace {
 
-RunResult Solve(const Mesh& m, Solver* s, double eps, int res = 64) {
+RunResult Solve(Mesh& m, Solver* s, double eps, int res = 64) {
   RunOptions o;
   o.resolution = res;
   o.epsilon = eps;
-  return RunSequential(m, o, s, nullptr);
+  return RunSequential(&m, o, s, nullptr, nullptr);
 }
 
 // Closed box, ρ and Ke everywhere: B = Ke / (1 − ρ) exactly.

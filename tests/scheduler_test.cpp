@@ -110,7 +110,7 @@ TEST(Scheduler, FirstLightsGoToDifferentWorkers) {
   RunOptions o = Opts();
   o.queue = 2;
   o.max_shots = 1;
-  RunMaster(m, o, &solver, &t, nullptr, nullptr);
+  RunMaster(&m, o, &solver, nullptr, &t, nullptr, nullptr);
   // Cyclic fill: worker 0 gets the strongest light, worker 1 the second,
   // worker 2 the third, then round again.
   ASSERT_GE(t.log_.size(), 6u);
@@ -122,6 +122,21 @@ TEST(Scheduler, FirstLightsGoToDifferentWorkers) {
   EXPECT_EQ(m.patches[first_of[2]].face, 2);
 }
 
+// Early in a run only the lights have power to shoot, so the fill runs out
+// of patches before every queue is served: what it did prepare must still
+// be sent (a run with one light and two workers once waited for ever).
+TEST(Scheduler, FillThatRunsOutStillSends) {
+  const glm::dvec3 dark(0.0);
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0), dark, dark, dark, dark, dark});
+  Mesh m = MakeMesh(s, OnePatchPerFace());
+  FakeTransport t(m, 2);
+  Solver solver(m, true);
+  RunOptions o = Opts();
+  o.max_seconds = 5;  // on the fake's clock: a hang ends as kLimit
+  RunResult r = RunMaster(&m, o, &solver, nullptr, &t, nullptr, nullptr);
+  EXPECT_EQ(r.status, RunStatus::kConverged) << r.why;
+}
+
 TEST(Scheduler, QueuesStayWithinTheHighMark) {
   Scene s = Box(1.0, {glm::dvec3(0.6)}, {glm::dvec3(1.0)});
   Mesh m = MakeMesh(s);
@@ -129,7 +144,7 @@ TEST(Scheduler, QueuesStayWithinTheHighMark) {
   Solver solver(m, true);
   RunOptions o = Opts();
   o.queue = 4;
-  RunResult r = RunMaster(m, o, &solver, &t, nullptr, nullptr);
+  RunResult r = RunMaster(&m, o, &solver, nullptr, &t, nullptr, nullptr);
   EXPECT_EQ(r.status, RunStatus::kConverged);
   EXPECT_LE(t.max_outstanding_, 4u);
   EXPECT_GE(t.max_outstanding_, 2u);  // the pipeline was used
@@ -145,14 +160,14 @@ TEST(Scheduler, LostWorkerLosesNothing) {
   RunOptions o = Opts();
   o.epsilon = 1e-4;
   InProcessTransport in(m, 32, false, 1);
-  ASSERT_EQ(RunMaster(m, o, &seq, &in, nullptr, nullptr).status, RunStatus::kConverged);
+  ASSERT_EQ(RunMaster(&m, o, &seq, nullptr, &in, nullptr, nullptr).status, RunStatus::kConverged);
 
   FakeTransport t(m, 3);
   t.lose_at_[5] = 1;
   t.lose_at_[40] = 2;
   Solver par(m, true);
   std::vector<std::string> notes;
-  RunResult r = RunMaster(m, o, &par, &t, nullptr,
+  RunResult r = RunMaster(&m, o, &par, nullptr, &t, nullptr,
                     [&](const std::string& line, bool warning) {
                       if (warning) notes.push_back(line);
                     });
@@ -176,7 +191,7 @@ TEST(Scheduler, LateCopyOfAColumnIsNotShotTwice) {
   FakeTransport t(m, 2);
   t.duplicate_at_ = 3;
   Solver solver(m, true);
-  RunResult r = RunMaster(m, Opts(), &solver, &t, nullptr, nullptr);
+  RunResult r = RunMaster(&m, Opts(), &solver, nullptr, &t, nullptr, nullptr);
   EXPECT_EQ(r.stale, 1);
   EXPECT_EQ(r.columns, r.shots);
 }
@@ -188,7 +203,7 @@ TEST(Scheduler, MasterTakesOverWhenAllWorkersAreLost) {
   t.lose_at_[3] = 0;
   t.lose_at_[4] = 1;
   Solver solver(m, true);
-  RunResult r = RunMaster(m, Opts(), &solver, &t, nullptr, nullptr);
+  RunResult r = RunMaster(&m, Opts(), &solver, nullptr, &t, nullptr, nullptr);
   EXPECT_EQ(r.status, RunStatus::kConverged);
   EXPECT_TRUE(r.fell_back);
   EXPECT_LT(solver.UnshotFraction(), 1e-3);
@@ -200,7 +215,7 @@ TEST(Scheduler, NoWorkerAtAll) {
   FakeTransport t(m, 2);
   t.never_join_ = true;
   Solver solver(m, true);
-  RunResult r = RunMaster(m, Opts(), &solver, &t, nullptr, nullptr);
+  RunResult r = RunMaster(&m, Opts(), &solver, nullptr, &t, nullptr, nullptr);
   EXPECT_EQ(r.status, RunStatus::kNoWorkers);
   EXPECT_EQ(r.shots, 0);
 }

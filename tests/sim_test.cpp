@@ -40,9 +40,9 @@ RunOptions Shots(long n) {
   return o;
 }
 
-RunResult Simulate(const Mesh& m, const RunOptions& o, Transport* t, Solver* solver = nullptr) {
+RunResult Simulate(Mesh& m, const RunOptions& o, Transport* t, Solver* solver = nullptr) {
   Solver own(m, o.overshoot);
-  return RunMaster(m, o, solver ? solver : &own, t, nullptr, nullptr);
+  return RunMaster(&m, o, solver ? solver : &own, nullptr, t, nullptr, nullptr);
 }
 
 // Adds up the frames the master sends and receives, encoded again here.
@@ -230,7 +230,7 @@ TEST(Sim, ACrashedWorkerLosesNothing) {
   RunOptions ro = Shots(0);
   ro.epsilon = 1e-4;
   Solver seq(m, true);
-  ASSERT_EQ(RunSequential(m, ro, &seq, nullptr).status, RunStatus::kConverged);
+  ASSERT_EQ(RunSequential(&m, ro, &seq, nullptr, nullptr).status, RunStatus::kConverged);
 
   SimOptions o = Fixed(3);
   o.latency_s = 1e-3;
@@ -238,7 +238,7 @@ TEST(Sim, ACrashedWorkerLosesNothing) {
   SimTransport t(m, o);
   Solver par(m, true);
   std::vector<std::string> warnings;
-  RunResult r = RunMaster(m, ro, &par, &t, nullptr, [&](const std::string& line, bool warning) {
+  RunResult r = RunMaster(&m, ro, &par, nullptr, &t, nullptr, [&](const std::string& line, bool warning) {
     if (warning) warnings.push_back(line);
   });
   ASSERT_EQ(r.status, RunStatus::kConverged) << r.why;

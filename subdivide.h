@@ -1,0 +1,92 @@
+// The subdivision policy (paper §4.3) and the bookkeeping of waves (§4.4):
+// which leaf elements to divide in one pass, when a pass is due and when a
+// wave is over. It reads the mesh and the solver's radiosity and divides
+// nothing itself: the run loop applies Divide() to what a pass returns, in
+// that order, and so can ship the same edits to workers.
+//
+// Dividing factor of a leaf e, the largest over its neighbours n across
+// shared edges (same face):
+//
+//   |B_e - B_n| / dist(e, n) * size(e) / scale  *  (1 + (level_n - level_e) / 2)
+//
+// luminance (channels averaged); size(e) = sqrt(area); the last term only
+// for finer neighbours. scale = max(B_e, B_n) + Kd·ambient + 0.2 × the mean
+// B of the lit scene: relative contrast where it is bright, absolute where
+// it is dark (hemicube noise in a dark corner is no reason to divide), and
+// never above what the light still unshot (the ambient term) may change.
+// Smooth light (a furnace, two far squares) gives factors of a few percent
+// at most, below the floor, and is never divided: at the default hemicube
+// resolution; at R = 64 an element far from the shooters covers a pixel or
+// two, and that noise may be divided.
+#ifndef RADIOSITY_SUBDIVIDE_H
+#define RADIOSITY_SUBDIVIDE_H
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "mesh.h"
+
+struct SubdivideOptions {
+  double threshold = 0.5;  // the dividing factor a leaf must exceed, at first
+  double floor = 0.2;      // ... lowered by `decay` every pass down to this
+  double decay = 0.7;
+  double min_size = 0;     // no child's longest edge shorter; 0: scene diagonal / 400
+  int max_level = 2;       // deepest level below the elements BuildMesh made
+  bool waves = true;       // restart on the finer mesh after wave_fraction
+  double wave_fraction = 0.2;  // of the wave's starting elements divided
+  long between = 10;       // shots between passes (at least 10)
+  double quiet = 0.002;    // a pass dividing under this fraction of the leaves is quiet
+};
+
+class Subdivider {
+ public:
+  // Connects the mesh's edges (ConnectEdges) for the neighbour search.
+  Subdivider(Mesh* mesh, const SubdivideOptions& opts);
+
+  // Whether a pass is due after `shots` shots of the current wave: not
+  // before every light source has shot once and 20 to 50 shots (patches /
+  // 20), then every `between` shots, until finished().
+  bool Due(long shots) const;
+
+  // One pass: the leaves whose dividing factor exceeds the threshold, and
+  // the coarser neighbours they force (neighbouring levels stay within
+  // one), coarser first. b: radiosity per element; ambient: the solver's
+  // overshooting estimate (before Kd). Lowers the threshold.
+  std::vector<int32_t> Pass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
+                            const glm::dvec3& ambient, long shots);
+
+  // True when the current wave should end, once it divided anything:
+  // wave_fraction of its starting elements divided, or a pass found little
+  // more to divide (`quiet`), or the wave `converged`. So
+  // waves stay short and the last one solves the final mesh from scratch,
+  // with no radiosity in the answer shared out by gradient. Always false
+  // without waves.
+  bool WaveOver(bool converged = false) const;
+  // A new wave starts on `mesh` as it is now.
+  void StartWave(const Mesh& mesh);
+
+  // A pass at the floor threshold found little to divide (under `quiet` of
+  // the leaves; it then divides nothing): no more passes.
+  bool finished() const { return finished_; }
+  long passes() const { return passes_; }
+  // Time spent dividing (policy, Divide, Solver::Divided), as the run
+  // loop measured it.
+  void CountTime(double seconds) { seconds_ += seconds; }
+  double seconds() const { return seconds_; }
+
+ private:
+  SubdivideOptions opts_;
+  double threshold_;
+  long first_ = 0;
+  long last_pass_ = -1;       // shot of the last pass in this wave
+  long wave_start_leaves_ = 0;
+  long divided_in_wave_ = 0;
+  bool finished_ = false;
+  bool quiet_ = false;        // the last pass divided under `quiet` of the leaves
+  long passes_ = 0;
+  double seconds_ = 0;
+};
+
+#endif

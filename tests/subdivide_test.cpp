@@ -1,0 +1,358 @@
+// Run-time subdivision: Divide() and its bookkeeping, the Solver's side
+// (sharing radiosity by gradient, old columns, waves), the hemicube and
+// the shading across T-vertices, and the policy on scenes with smooth and
+// with sharp light.
+#include "subdivide.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "hemicube.h"
+#include "master.h"
+#include "results.h"
+#include "test_util.h"
+
+namespace {
+
+double Sum(const std::vector<FormFactor>& col) {
+  double s = 0;
+  for (const auto& f : col) s += f.f;
+  return s;
+}
+
+// One unit square (face 0) cut into n x n elements, one patch.
+Mesh Square(int n) {
+  Scene s = EmptyScene();
+  AddFace(&s, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, glm::dvec3(0.5), glm::dvec3(0));
+  MeshOptions o;
+  o.patch_size = 10;
+  o.elements_per_patch = n;
+  return MakeMesh(s, o);
+}
+
+int LeafAt(const Mesh& m, const glm::dvec3& p) {
+  int best = -1;
+  double d = HUGE_VAL;
+  for (size_t e = 0; e < m.elems.size(); ++e)
+    if (m.elems[e].IsLeaf() && glm::length(m.Centroid(int(e)) - p) < d) {
+      d = glm::length(m.Centroid(int(e)) - p);
+      best = int(e);
+    }
+  return best;
+}
+
+TEST(Divide, QuadAndTriangleChildrenTileTheParent) {
+  Scene s = EmptyScene();
+  AddFace(&s, {{0, 0, 0}, {2, 0, 0}, {2.5, 1, 0}, {0.2, 1.4, 0}}, glm::dvec3(0.5), glm::dvec3(0));
+  AddFace(&s, {{0, 0, 1}, {3, 0, 1}, {0, 2, 1}}, glm::dvec3(0.5), glm::dvec3(0));
+  MeshOptions o;
+  o.patch_size = 10;
+  o.elements_per_patch = 1;
+  Mesh m = MakeMesh(s, o);
+  ASSERT_EQ(m.elems.size(), 2u);
+  for (int e : {0, 1}) {
+    Divide(&m, e);
+    const Element& p = m.elems[e];
+    ASSERT_FALSE(p.IsLeaf());
+    double a = 0;
+    for (int k = 0; k < kChildren; ++k) {
+      const Element& c = m.elems[p.first_child + k];
+      EXPECT_EQ(c.level, 1);
+      EXPECT_EQ(c.parent, e);
+      EXPECT_EQ(c.patch, p.patch);
+      EXPECT_EQ(c.IsTriangle(), p.IsTriangle());
+      EXPECT_GT(c.area, 0);
+      a += c.area;
+      std::vector<glm::dvec3> poly;
+      for (int v = 0; v < (c.IsTriangle() ? 3 : 4); ++v) poly.push_back(m.verts[c.v[v]]);
+      EXPECT_GT(glm::dot(AreaVector(poly), m.FaceOf(e).normal), 0) << "child faces its face's way";
+    }
+    EXPECT_NEAR(a, p.area, 1e-12 * p.area);
+  }
+  EXPECT_EQ(m.LeafCount(), 8);
+}
+
+// Neighbours divided one after the other share their common midpoint
+// (one vertex id); before the second is divided, it holds it as a
+// T-vertex; LeafNeighbours sees alike, finer and coarser neighbours.
+TEST(Divide, NeighboursShareMidpointsAndSeeTVertices) {
+  Mesh m = Square(2);  // elements 0..3: (0,0) (1,0) (0,1) (1,1)
+  const int a = LeafAt(m, {0.25, 0.25, 0}), b = LeafAt(m, {0.75, 0.25, 0});
+  Divide(&m, a);
+  const int mid = m.midpoint.at(EdgeKey(std::min(m.elems[a].v[1], m.elems[a].v[2]),
+                                        std::max(m.elems[a].v[1], m.elems[a].v[2])));
+  EXPECT_EQ(m.verts[mid], glm::dvec3(0.5, 0.25, 0));
+  int tvs = 0;
+  for (int v : m.elems[b].mid) tvs += v == mid;
+  EXPECT_EQ(tvs, 1) << "b holds a's midpoint as a T-vertex";
+  std::vector<int> nb;
+  LeafNeighbours(m, b, &nb);
+  EXPECT_EQ(nb.size(), 3u) << "two finer children of a, and the element above";
+  const int child = LeafAt(m, {0.375, 0.125, 0});
+  LeafNeighbours(m, child, &nb);
+  EXPECT_NE(std::find(nb.begin(), nb.end(), b), nb.end()) << "the coarser neighbour";
+  const size_t verts = m.verts.size();
+  Divide(&m, b);
+  EXPECT_EQ(m.verts.size(), verts + 4) << "3 new midpoints and a centre, the shared one reused";
+  for (int k = 0; k < kChildren; ++k)
+    for (int v : m.elems[m.elems[b].first_child + k].mid) EXPECT_LT(v, 0);
+}
+
+TEST(Divide, SameEditsGiveTheSameMesh) {
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  Mesh a = MakeMesh(s), b = MakeMesh(s);
+  for (int e : {5, 6, 7, 105, 2400, 2401, 2405, 300}) {
+    Divide(&a, e);
+    Divide(&b, e);
+  }
+  ASSERT_EQ(a.verts.size(), b.verts.size());
+  ASSERT_EQ(a.elems.size(), b.elems.size());
+  for (size_t v = 0; v < a.verts.size(); ++v) EXPECT_EQ(a.verts[v], b.verts[v]);
+  for (size_t e = 0; e < a.elems.size(); ++e) {
+    EXPECT_EQ(a.elems[e].v, b.elems[e].v);
+    EXPECT_EQ(a.elems[e].mid, b.elems[e].mid);
+    EXPECT_EQ(a.elems[e].first_child, b.elems[e].first_child);
+  }
+}
+
+// A closed box divided unevenly (levels 0 and 1 side by side, T-vertices
+// inside faces and where faces meet): columns still sum to 1, also with
+// the hemicube aligned with the edges (angle 0), where a crack would
+// catch whole rows of pixel centres.
+TEST(Divide, HemicubeSeesNoCracks) {
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  for (int e = 0; e < 2400; e += 3) Divide(&m, e);
+  for (int res : {64, 256}) {
+    Hemicube h(res);
+    std::vector<FormFactor> col;
+    for (size_t p = 0; p < m.patches.size(); p += 7)
+      for (double angle : {0.0, 0.3, 1.1}) {
+        h.Column(m, int(p), angle, &col);
+        EXPECT_NEAR(Sum(col), 1.0, 1e-5) << "patch " << p << " R " << res;
+        for (const FormFactor& f : col) ASSERT_TRUE(m.elems[f.elem].IsLeaf());
+      }
+  }
+}
+
+// Shading: a T-vertex has the value halfway along the coarser edge.
+TEST(Divide, ShadingInterpolatesAtTVertices) {
+  Mesh m = Square(2);
+  const int a = LeafAt(m, {0.25, 0.25, 0});
+  Divide(&m, a);
+  std::vector<glm::dvec3> b(m.elems.size());
+  for (size_t e = 0; e < b.size(); ++e) b[e] = glm::dvec3(m.Centroid(int(e)).x * 3 + 1);
+  ShadedMesh sh = Shade(m, b);
+  for (const Element& e : m.elems) {
+    if (!e.IsLeaf()) continue;
+    for (int k = 0; k < 4; ++k)
+      if (e.mid[k] >= 0) {
+        const glm::vec3 want = 0.5f * (sh.colors[e.v[k]] + sh.colors[e.v[(k + 1) % 4]]);
+        EXPECT_FLOAT_EQ(sh.colors[e.mid[k]].r, want.r);
+      }
+  }
+}
+
+// Closed box, light from one wall: a solver state with real gradients.
+struct Lit {
+  Scene scene = Box(1.0, {glm::dvec3(0.6)}, {glm::dvec3(0), glm::dvec3(4), glm::dvec3(0),
+                                             glm::dvec3(0), glm::dvec3(0), glm::dvec3(0)});
+  Mesh mesh = MakeMesh(scene);
+};
+
+TEST(Solver, DividedKeepsPowerAndFollowsTheGradient) {
+  Lit lit;
+  Solver solver(lit.mesh, true);
+  RunOptions o;
+  o.resolution = 64;
+  o.max_shots = 150;
+  RunSequential(&lit.mesh, o, &solver, nullptr, nullptr);
+  const std::vector<glm::dvec3> before = solver.radiosity();
+  std::vector<int32_t> edits;
+  for (int e = 0; e < 2400; e += 5) edits.push_back(e);
+  for (int32_t e : edits) Divide(&lit.mesh, e);
+  solver.Divided(edits);
+  const auto& b = solver.radiosity();
+  ASSERT_EQ(b.size(), lit.mesh.elems.size());
+  int shaped = 0;
+  for (int32_t e : edits) {
+    const Element& p = lit.mesh.elems[e];
+    glm::dvec3 power(0.0);
+    for (int k = 0; k < kChildren; ++k) {
+      const int c = p.first_child + k;
+      power += b[c] * lit.mesh.elems[c].area;
+      for (int ch = 0; ch < 3; ++ch) EXPECT_GE(b[c][ch], 0);
+      shaped += std::abs(b[c].r - before[e].r) > 1e-9 * before[e].r;
+    }
+    for (int ch = 0; ch < 3; ++ch)
+      EXPECT_NEAR(power[ch], before[e][ch] * p.area, 1e-12 * before[e][ch] * p.area) << e;
+  }
+  EXPECT_GT(shaped, int(edits.size())) << "children differ where the light does";
+}
+
+// A column computed before a division: what a divided element receives
+// goes to every leaf under it alike, and the power shot is the same.
+TEST(Solver, ShootsColumnsOfAnOlderHierarchy) {
+  Lit lit;
+  Mesh& m = lit.mesh;
+  Hemicube h(64);
+  Solver solver(m, false);
+  const int p = solver.Select();
+  std::vector<FormFactor> col;
+  h.Column(m, p, 0.0, &col);
+  std::vector<int32_t> edits;
+  for (const FormFactor& f : col)
+    if (f.elem % 3 == 0) edits.push_back(f.elem);
+  ASSERT_FALSE(edits.empty());
+  for (int32_t e : edits) Divide(&m, e);
+  solver.Divided(edits);
+  const std::vector<glm::dvec3> before = solver.radiosity();
+  solver.Shoot(p, col);
+  const auto& after = solver.radiosity();
+  double got = 0, want = 0;
+  std::vector<int> leaves;
+  for (const FormFactor& f : col) {
+    const Element& e = m.elems[f.elem];
+    const double rho = m.FaceOf(f.elem).rho.r;
+    want += rho * 4 * f.f * m.patches[p].area;
+    m.LeavesUnder(f.elem, &leaves);
+    for (int l : leaves) {
+      EXPECT_NEAR(after[l].r - before[l].r, rho * 4 * f.f * m.patches[p].area / e.area, 1e-9);
+      got += (after[l].r - before[l].r) * m.elems[l].area;
+    }
+  }
+  EXPECT_NEAR(got, want, 1e-9 * want);
+}
+
+TEST(Solver, NewWaveStartsFromTheEmitters) {
+  Lit lit;
+  Solver solver(lit.mesh, true);
+  RunOptions o;
+  o.resolution = 32;
+  o.max_shots = 20;
+  RunSequential(&lit.mesh, o, &solver, nullptr, nullptr);
+  Divide(&lit.mesh, 7);
+  solver.Divided({7});
+  solver.NewWave();
+  EXPECT_EQ(solver.UnshotFraction(), 1.0);
+  for (size_t e = 0; e < lit.mesh.elems.size(); ++e)
+    EXPECT_EQ(solver.radiosity()[e], lit.mesh.FaceOf(int(e)).emission);
+  for (size_t p = 0; p < lit.mesh.patches.size(); ++p) EXPECT_EQ(solver.TimesShot(int(p)), 0);
+}
+
+RunResult Adaptive(Mesh* m, Solver* s, Subdivider* sub, double eps, int res = 64,
+                   std::vector<int>* wave_ends = nullptr) {
+  RunOptions o;
+  o.resolution = res;
+  o.epsilon = eps;
+  if (wave_ends) o.wave_end = [&](int w) { wave_ends->push_back(w); };
+  return RunSequential(m, o, s, sub, nullptr);
+}
+
+// Smooth light is never divided: the furnace, and two far squares.
+TEST(Subdivider, SmoothLightIsNotDivided) {
+  {
+    Scene s = Box(1.0, {glm::dvec3(0.9)}, {glm::dvec3(1.0)});
+    Mesh m = MakeMesh(s);
+    Solver solver(m, true);
+    Subdivider sub(&m, SubdivideOptions());
+    RunResult r = Adaptive(&m, &solver, &sub, 1e-4);
+    ASSERT_EQ(r.status, RunStatus::kConverged);
+    EXPECT_EQ(m.LeafCount(), 2400);
+    EXPECT_GT(r.passes, 0);
+    EXPECT_TRUE(sub.finished());
+    EXPECT_EQ(r.waves, 1);
+    for (const glm::dvec3& b : FaceRadiosity(m, solver.radiosity())) EXPECT_NEAR(b.r, 10, 0.05);
+  }
+  {
+    Scene s = EmptyScene();
+    AddFace(&s, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, glm::dvec3(0), glm::dvec3(1));
+    AddFace(&s, {{0, 0, 4}, {0, 1, 4}, {1, 1, 4}, {1, 0, 4}}, glm::dvec3(1), glm::dvec3(0));
+    Mesh m = MakeMesh(s);
+    const long n = m.LeafCount();
+    Solver solver(m, true);
+    Subdivider sub(&m, SubdivideOptions());
+    // At the default resolution, as tests/formfactor.sh runs it (at R = 64
+    // an element far away is a pixel or two: noise, not light, varies).
+    ASSERT_EQ(Adaptive(&m, &solver, &sub, 1e-6, 256).status, RunStatus::kConverged);
+    EXPECT_EQ(m.LeafCount(), n);
+  }
+}
+
+// A small light (0.04 across, at height 2), a square occluder under it
+// (x, y in 0.3..0.7 at height 1, both sides) and a floor (face 0): a sharp
+// shadow whose edge on the floor is at x or y = 0.5 ± 0.4.
+Scene ShadowScene() {
+  Scene s = EmptyScene();
+  AddFace(&s, {{-1, -1, 0}, {2, -1, 0}, {2, 2, 0}, {-1, 2, 0}}, glm::dvec3(0.6), glm::dvec3(0));
+  AddFace(&s, {{0.3, 0.3, 1}, {0.3, 0.7, 1}, {0.7, 0.7, 1}, {0.7, 0.3, 1}}, glm::dvec3(0.5),
+          glm::dvec3(0));  // faces down
+  AddFace(&s, {{0.3, 0.3, 1.001}, {0.7, 0.3, 1.001}, {0.7, 0.7, 1.001}, {0.3, 0.7, 1.001}},
+          glm::dvec3(0.5), glm::dvec3(0));  // faces up, to the light
+  AddFace(&s, {{0.48, 0.48, 2}, {0.48, 0.52, 2}, {0.52, 0.52, 2}, {0.52, 0.48, 2}}, glm::dvec3(0),
+          glm::dvec3(100));  // the light, facing down
+  return s;
+}
+
+TEST(Subdivider, SharpShadowIsDividedAlongItsEdge) {
+  Scene s = ShadowScene();
+  MeshOptions o;
+  o.patch_size = 0.25;
+  Mesh m = MakeMesh(s, o);
+  Solver solver(m, true);
+  Subdivider sub(&m, SubdivideOptions());
+  std::vector<int> ends;
+  RunResult r = Adaptive(&m, &solver, &sub, 1e-3, 256, &ends);
+  ASSERT_EQ(r.status, RunStatus::kConverged);
+  EXPECT_GT(r.waves, 1);
+  ASSERT_EQ(int(ends.size()), r.waves - 1);
+  for (size_t i = 0; i < ends.size(); ++i) EXPECT_EQ(ends[i], int(i) + 1);
+  double near_n = 0, near_a = 0, far_n = 0, far_a = 0;
+  for (size_t e = 0; e < m.elems.size(); ++e) {
+    const Element& el = m.elems[e];
+    if (!el.IsLeaf() || m.patches[el.patch].face != 0) continue;
+    const glm::dvec3 c = m.Centroid(int(e));
+    const double d = std::max(std::abs(c.x - 0.5), std::abs(c.y - 0.5));
+    const bool near = std::abs(d - 0.4) < 0.1;
+    (near ? near_n : far_n) += 1;
+    (near ? near_a : far_a) += el.area;
+  }
+  const double density_near = near_n / near_a, density_far = far_n / far_a;
+  EXPECT_GT(density_near, 4 * density_far) << near_n << " near, " << far_n << " elsewhere";
+
+  // Against a converged uniform fine mesh, point by point, it is closer
+  // than the same run without subdivision.
+  MeshOptions fine = o;
+  fine.elements_per_patch = 16;
+  Mesh ref = MakeMesh(s, fine);
+  Solver ref_solver(ref, true);
+  ASSERT_EQ(Adaptive(&ref, &ref_solver, nullptr, 1e-4, 256).status, RunStatus::kConverged);
+  Mesh plain = MakeMesh(s, o);
+  Solver plain_solver(plain, true);
+  ASSERT_EQ(Adaptive(&plain, &plain_solver, nullptr, 1e-3, 256).status, RunStatus::kConverged);
+  double rms, adaptive_err, plain_err;
+  FieldError(m, solver.radiosity(), ref, ref_solver.radiosity(), &rms, &adaptive_err);
+  FieldError(plain, plain_solver.radiosity(), ref, ref_solver.radiosity(), &rms, &plain_err);
+  EXPECT_LT(adaptive_err, 0.7 * plain_err) << "adaptive " << adaptive_err << ", plain " << plain_err;
+  std::printf("sharp shadow: %ld -> %ld elements in %d waves, %.0f near the edge, %.0f elsewhere; "
+              "error per point %.4f (plain %.4f)\n",
+              plain.LeafCount(), m.LeafCount(), r.waves, near_n, far_n, adaptive_err, plain_err);
+}
+
+TEST(Subdivider, WithoutWavesOneWave) {
+  Scene s = ShadowScene();
+  MeshOptions o;
+  o.patch_size = 0.25;
+  Mesh m = MakeMesh(s, o);
+  Solver solver(m, true);
+  SubdivideOptions so;
+  so.waves = false;
+  Subdivider sub(&m, so);
+  RunResult r = Adaptive(&m, &solver, &sub, 1e-3);
+  EXPECT_EQ(r.status, RunStatus::kConverged);
+  EXPECT_EQ(r.waves, 1);
+  EXPECT_GT(m.LeafCount(), int(m.patches.size()) * 4);
+}
+
+}  // namespace
