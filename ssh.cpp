@@ -124,12 +124,13 @@ class SshConn : public Conn {
 };
 
 short SshConn::Events(bool writing) {
-  ssh_session s = session_->get();
-  ssh_blocking_flush(s, 0);  // push what the session holds, as far as the socket takes it
+  // Pushes what the session holds, as far as the socket takes it; the
+  // rest waits for POLLOUT. (ssh_get_poll_flags would keep saying
+  // "write pending" after a flush done this way.)
+  const bool pending = ssh_blocking_flush(session_->get(), 0) == SSH_AGAIN;
   short ev = POLLIN;
   // A shut window opens with a packet from the server: POLLIN.
-  if (writing && ssh_channel_window_size(ch_) > 0) ev |= POLLOUT;
-  if (ssh_get_poll_flags(s) & SSH_WRITE_PENDING) ev |= POLLOUT;
+  if (pending || (writing && ssh_channel_window_size(ch_) > 0)) ev |= POLLOUT;
   return ev;
 }
 

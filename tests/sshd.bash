@@ -6,7 +6,8 @@
 #   start_sshd [EXTRA_CONFIG_LINE...]
 #     starts sshd at a free port with its own host key, one authorized
 #     key (for the user running the test) and its own settings (no PAM,
-#     StrictModes off, TMPDIR=$T/remote for the sessions); sets
+#     StrictModes off, TMPDIR=$T/remote and HOME=$T/remote-home for the
+#     sessions); sets
 #     SSHD_PORT, SSHD_PID, SSH_HOME (a HOME whose .ssh has the user key,
 #     a known_hosts with the host key, and nothing else) and REMOTE_TMP.
 #     Returns 1 with SSHD_WHY set when sshd cannot be started.
@@ -18,10 +19,13 @@ start_sshd() {
   SSHD_WHY=""
   if [ ! -x "$sshd" ]; then SSHD_WHY="no $sshd (apt-get install openssh-server)"; return 1; fi
   if ! command -v ssh-keygen >/dev/null; then SSHD_WHY="no ssh-keygen (openssh-client)"; return 1; fi
-  mkdir -p "$d/keys" "$T/home/.ssh" "$T/remote"
+  mkdir -p "$d/keys" "$T/home/.ssh" "$T/remote" "$T/remote-home"
   chmod 700 "$T/home/.ssh"
-  ssh-keygen -q -t ed25519 -N '' -C test-host -f "$d/host_key" || { SSHD_WHY="ssh-keygen failed"; return 1; }
-  ssh-keygen -q -t ed25519 -N '' -C test-user -f "$T/home/.ssh/id_ed25519" || { SSHD_WHY="ssh-keygen failed"; return 1; }
+  # Keys are kept across a restart (another config, same identities).
+  [ -f "$d/host_key" ] || ssh-keygen -q -t ed25519 -N '' -C test-host -f "$d/host_key" ||
+    { SSHD_WHY="ssh-keygen failed"; return 1; }
+  [ -f "$T/home/.ssh/id_ed25519" ] || ssh-keygen -q -t ed25519 -N '' -C test-user -f "$T/home/.ssh/id_ed25519" ||
+    { SSHD_WHY="ssh-keygen failed"; return 1; }
   cp "$T/home/.ssh/id_ed25519.pub" "$d/keys/$(id -un)"
   # sshd checks for its privilege separation directory even when unused.
   [ -d /run/sshd ] || mkdir -p /run/sshd 2>/dev/null
@@ -39,7 +43,9 @@ start_sshd() {
       echo "PasswordAuthentication no"
       echo "KbdInteractiveAuthentication no"
       echo "PermitRootLogin prohibit-password"
-      echo "SetEnv TMPDIR=$REMOTE_TMP"
+      # The sessions' HOME too: no login shell start-up files of the
+      # machine's user (slow ones would only slow the tests down).
+      echo "SetEnv TMPDIR=$REMOTE_TMP HOME=$T/remote-home"
       echo "LogLevel VERBOSE"
       local line
       for line in "$@"; do echo "$line"; done
