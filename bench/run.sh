@@ -35,3 +35,5 @@ grep '^converge' "$rows" | sed 's/^converge | /| /; s/$/ |/'
 } >"$out_converge"
 echo
 echo "CSV: $out_columns $out_converge"
+echo
+bash bench/ssh.sh
