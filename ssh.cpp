@@ -279,6 +279,10 @@ bool Upload(ssh_session s, const SelfImage& self, int timeout_ms, bool* sent, st
     ok = ok && ssh_channel_send_eof(ch) == SSH_OK && ReadLine(ch, timeout_ms, &out);
   }
   std::string why = LastLine(out);
+  // Until its process has exited, sshd counts the channel against
+  // MaxSessions, even once closed: wait for that (the exit status) before
+  // the workers' channels are opened.
+  if (ok) ssh_channel_get_exit_status(ch);
   ssh_channel_close(ch);
   ssh_channel_free(ch);
   if (ok && why.compare(0, 5, "have ") == 0 && why.find('\'') == std::string::npos) {

@@ -131,7 +131,7 @@ stop_sshd
 start_sshd "MaxSessions 2" || { fail "restart sshd: $SSHD_WHY"; finish; }
 HOST=127.0.0.1:$SSHD_PORT
 echo "$HOST slots=3" >"$T/hosts-3"
-rad_run maxsess -H "$T/hosts-3" -s 100 "$CORNELL"
+rad_run maxsess -H "$T/hosts-3" "${ARGS[@]}" "$CORNELL"
 [ "$RC" -eq 0 ] && says maxsess "$HOST worker 3: joined" && says maxsess "allows 2 channels per connection" &&
   pass "MaxSessions 2, slots=3: a second connection, three workers" ||
   { fail "MaxSessions (exit $RC)"; show maxsess 6; }
