@@ -15,11 +15,14 @@
 #include <string>
 #include <unistd.h>
 
+#include "connect.h"
+#include "hosts.h"
 #include "image.h"
 #include "master.h"
 #include "mesh.h"
 #include "results.h"
 #include "scene.h"
+#include "ssh.h"
 #include "transport.h"
 #include "worker.h"
 #include "subdivide.h"
@@ -49,6 +52,13 @@ const char kUsage[] =
     "      --queue N          patches queued per worker (default: automatic, 3-10)\n"
     "      --timeout SEC      drop a worker silent this long (default 10)\n"
     "      --worker-cmd CMD   start local workers with CMD --worker\n"
+    "  -H, --hosts FILE       also start workers on the hosts in FILE (ssh);\n"
+    "                         -j then defaults to 0\n"
+    "      --dump-hosts       print the hosts of -H FILE as parsed, and exit\n"
+    "      --accept-new-host-keys  record unknown ssh host keys (default: refuse)\n"
+    "      --listen [HOST:]PORT  take workers that connect back (--secret);\n"
+    "                         -j then defaults to 0\n"
+    "      --secret FILE      shared secret of --listen and --connect (mode 0600)\n"
     "  -r, --resolution R     hemicube pixels across the top face (default 256)\n"
     "  -e, --epsilon E        stop when unshot energy < E x emitted (default 1e-3)\n"
     "  -s, --shots N          stop after N shots\n"
@@ -73,7 +83,9 @@ const char kUsage[] =
     "  -v, --verbose          a line per progress sample\n"
     "      --version          print the version\n"
     "  -h, --help             this help\n"
-    "       radiosity --worker   speak the worker protocol on stdin/stdout\n";
+    "       radiosity --worker   speak the worker protocol on stdin/stdout\n"
+    "       radiosity --worker --connect HOST:PORT --secret FILE\n"
+    "                            the same with a master that --listens\n";
 
 volatile std::sig_atomic_t g_stop = 0;
 
@@ -145,6 +157,7 @@ int main(int argc, char** argv) {
     kNoOvershoot = 256, kReference, kPatchSize, kElements, kNoRotate, kSeed,
     kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
     kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
+    kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect,
   };
   static const option kLong[] = {
       {"out", required_argument, nullptr, 'o'},
@@ -153,6 +166,12 @@ int main(int argc, char** argv) {
       {"timeout", required_argument, nullptr, kTimeout},
       {"worker", no_argument, nullptr, kWorker},
       {"worker-cmd", required_argument, nullptr, kWorkerCmd},
+      {"hosts", required_argument, nullptr, 'H'},
+      {"dump-hosts", no_argument, nullptr, kDumpHosts},
+      {"accept-new-host-keys", no_argument, nullptr, kAcceptNewHostKeys},
+      {"listen", required_argument, nullptr, kListen},
+      {"secret", required_argument, nullptr, kSecret},
+      {"connect", required_argument, nullptr, kConnect},
       {"resolution", required_argument, nullptr, 'r'},
       {"epsilon", required_argument, nullptr, 'e'},
       {"shots", required_argument, nullptr, 's'},
@@ -186,19 +205,29 @@ int main(int argc, char** argv) {
   bool subdivide = true;
   int width = 512, height = 512, verbosity = 1;
   long workers = std::max(1L, sysconf(_SC_NPROCESSORS_ONLN));
-  bool worker_mode = false;
-  std::string worker_cmd;
+  bool worker_mode = false, workers_given = false, dump_hosts = false;
+  std::string worker_cmd, hosts_file, listen, secret_file, connect;
   PoolOptions pool_opts;
+  SshOptions ssh_opts;
   opterr = 0;
   int c;
-  while ((c = getopt_long(argc, argv, ":o:j:r:e:s:t:qvh", kLong, nullptr)) != -1) {
+  while ((c = getopt_long(argc, argv, ":o:j:H:r:e:s:t:qvh", kLong, nullptr)) != -1) {
     switch (c) {
       case 'o': out_dir = optarg; break;
-      case 'j': workers = Integer("--workers", optarg, 0, kMaxLocalWorkers); break;
+      case 'j':
+        workers = Integer("--workers", optarg, 0, kMaxLocalWorkers);
+        workers_given = true;
+        break;
       case kQueue: run.queue = int(Integer("--queue", optarg, 1, 64)); break;
       case kTimeout: pool_opts.timeout_s = Number("--timeout", optarg, 0.5, 86400); break;
       case kWorker: worker_mode = true; break;
       case kWorkerCmd: worker_cmd = optarg; break;
+      case 'H': hosts_file = optarg; break;
+      case kDumpHosts: dump_hosts = true; break;
+      case kAcceptNewHostKeys: ssh_opts.accept_new_host_keys = true; break;
+      case kListen: listen = optarg; break;
+      case kSecret: secret_file = optarg; break;
+      case kConnect: connect = optarg; break;
       case 'r': {
         run.resolution = int(Integer("--resolution", optarg, 8, Hemicube::kMaxResolution));
         if (run.resolution % 2) BadOption("--resolution", optarg, "must be even");
@@ -241,20 +270,54 @@ int main(int argc, char** argv) {
       default: Die(kExitUsage, std::string("unknown option ") + argv[optind - 1] + " (try 'radiosity --help')");
     }
   }
+  // Connect-back: the secret is read before anything else, so that a
+  // file others can read stops the run before it starts.
+  std::string secret, err;
+  if (!listen.empty() || !connect.empty()) {
+    if (secret_file.empty())
+      Die(kExitUsage, std::string(listen.empty() ? "--connect" : "--listen") +
+                          " needs --secret FILE (the same file for the master and the workers)");
+    if (!ReadSecret(secret_file, &secret, &err)) Die(kExitUsage, err);
+  } else if (!secret_file.empty()) {
+    Die(kExitUsage, "--secret goes with --listen or --worker --connect");
+  }
+  if (!connect.empty() && !worker_mode)
+    Die(kExitUsage, "--connect is for workers: radiosity --worker --connect HOST:PORT --secret FILE");
   if (worker_mode) {
     if (optind != argc) Die(kExitUsage, "--worker takes no scene: the master sends it");
-    std::string err;
-    const int status = RunWorker(0, 1, &err);
+    int in = 0, out = 1;
+    if (!connect.empty()) {
+      std::string host;
+      int port = 0;
+      if (!ParseEndpoint(connect, true, &host, &port, &err))
+        BadOption("--connect", connect.c_str(), err.c_str());
+      in = out = ConnectBack(host, port, secret, &err);
+      if (in < 0) Die(kExitFailure, "worker: " + err);
+    }
+    const int status = RunWorker(in, out, &err);
     if (status != 0) std::fprintf(stderr, "radiosity: worker: %s\n", err.c_str());
     return status;
   }
+  std::vector<HostSpec> hosts;
+  if (!hosts_file.empty() && !ReadHosts(hosts_file, &hosts, &err)) Die(kExitUsage, err);
+  if (dump_hosts) {
+    if (hosts_file.empty()) Die(kExitUsage, "--dump-hosts needs -H FILE");
+    for (const HostSpec& h : hosts) std::printf("%s\n", FormatHost(h).c_str());
+    return kExitOk;
+  }
+  std::string listen_host;
+  int listen_port = 0;
+  if (!listen.empty() && !ParseEndpoint(listen, false, &listen_host, &listen_port, &err))
+    BadOption("--listen", listen.c_str(), err.c_str());
+  // Remote workers take the place of local ones unless -j says otherwise.
+  const bool remote = !hosts.empty() || !listen.empty();
+  if (remote && !workers_given) workers = 0;
   if (optind != argc - 1) {
     std::fputs(kUsage, stderr);
     return kExitUsage;
   }
   const std::string scene_path = argv[optind];
 
-  std::string err;
   std::vector<std::string> warnings;
   Scene scene;
   bool loaded = LoadScene(scene_path, &scene, &err, &warnings);
@@ -315,8 +378,11 @@ int main(int argc, char** argv) {
   std::unique_ptr<Subdivider> subdivider;
   if (subdivide) subdivider = std::make_unique<Subdivider>(&mesh, sub_opts);
   const long built = mesh.LeafCount();
+  auto note = [&](const std::string& line, bool warning) {
+    if (warning || verbosity >= 2) std::fprintf(stderr, "radiosity: %s\n", line.c_str());
+  };
   std::unique_ptr<Transport> transport;
-  if (workers == 0) {
+  if (workers == 0 && !remote) {
     transport = std::make_unique<InProcessTransport>(mesh, run.resolution, run.rotate, run.seed);
   } else {
     std::signal(SIGPIPE, SIG_IGN);  // a dead worker is an error on its connection
@@ -325,23 +391,41 @@ int main(int argc, char** argv) {
     if (pool->SceneTooLarge())
       Die(kExitUsage, scene_path + ": too large to send to workers (protocol limit " +
                           std::to_string(proto::kMaxFrame >> 20) + " MiB); use -j 0");
-    const std::vector<std::string> cmd =
-        worker_cmd.empty() ? std::vector<std::string>{SelfExe(), "--worker"}
-                           : std::vector<std::string>{"/bin/sh", "-c", "exec " + worker_cmd + " --worker"};
-    for (long i = 0; i < workers; ++i) {
+    auto command = [&](const std::string& user_cmd) {
+      return user_cmd.empty() ? std::vector<std::string>{SelfExe(), "--worker"}
+                              : std::vector<std::string>{"/bin/sh", "-c", "exec " + user_cmd + " --worker"};
+    };
+    // -j workers, then the hosts file's localhost lines: forked here.
+    std::vector<std::vector<std::string>> local(size_t(workers), command(worker_cmd));
+    std::vector<HostSpec> ssh_hosts;
+    for (const HostSpec& h : hosts) {
+      if (!h.Local()) ssh_hosts.push_back(h);
+      else local.insert(local.end(), size_t(h.slots), command(h.cmd.empty() ? worker_cmd : h.cmd));
+    }
+    for (size_t i = 0; i < local.size(); ++i) {
       pid_t pid = 0;
-      std::unique_ptr<Conn> conn = SpawnLocal(cmd, &pid, &err);
+      std::unique_ptr<Conn> conn = SpawnLocal(local[i], &pid, &err);
       const std::string name = "local worker " + std::to_string(i + 1);
       if (conn)
         pool->Add(std::move(conn), name + " (pid " + std::to_string(pid) + ")");
       else
         std::fprintf(stderr, "radiosity: %s: %s\n", name.c_str(), err.c_str());
     }
+    if (!ssh_hosts.empty()) {
+      ssh_opts.timeout_s = pool_opts.timeout_s;
+      pool->AddSource(StartSshHosts(ssh_hosts, ssh_opts, note));
+    }
+    if (!listen.empty()) {
+      std::string bound;
+      std::unique_ptr<WorkerSource> listener =
+          Listen(listen_host, listen_port, secret, note, &bound, &err);
+      if (!listener) Die(kExitFailure, "--listen " + listen + ": " + err);
+      if (verbosity >= 1)
+        std::fprintf(stderr, "radiosity: listening for workers on %s\n", bound.c_str());
+      pool->AddSource(std::move(listener));
+    }
     transport = std::move(pool);
   }
-  auto note = [&](const std::string& line, bool warning) {
-    if (warning || verbosity >= 2) std::fprintf(stderr, "radiosity: %s\n", line.c_str());
-  };
   RunResult result =
       RunMaster(&mesh, run, &solver, subdivider.get(), transport.get(), sample, note);
   transport->Shutdown();

@@ -23,17 +23,15 @@ double WallNow() {
 }
 
 std::string DescribeStatus(int status) {
-  if (WIFEXITED(status)) {
-    if (WEXITSTATUS(status) == 127) return "could not be started (exit status 127)";
-    return "exited with status " + std::to_string(WEXITSTATUS(status));
-  }
+  if (WIFEXITED(status)) return DescribeExit(WEXITSTATUS(status));
   if (WIFSIGNALED(status))
     return "killed by signal " + std::to_string(WTERMSIG(status)) + " (" +
            strsignal(WTERMSIG(status)) + ")";
   return "ended";
 }
 
-// A worker process on this machine, on one end of a socketpair.
+// A worker process on this machine, on one end of a socketpair; or, with
+// no pid, a worker elsewhere on the other end of a TCP connection.
 class LocalConn : public Conn {
  public:
   LocalConn(int fd, pid_t pid) : fd_(fd), pid_(pid) {}
@@ -75,6 +73,13 @@ class LocalConn : public Conn {
 bool IsAgain() { return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR; }
 
 }  // namespace
+
+short Conn::Events(bool writing) { return short(POLLIN | (writing ? POLLOUT : 0)); }
+
+std::string DescribeExit(int status) {
+  if (status == 127) return "could not be started (exit status 127)";
+  return "exited with status " + std::to_string(status);
+}
 
 double ThreadCpuSeconds() {
   timespec ts;
@@ -123,6 +128,11 @@ std::unique_ptr<Conn> SpawnLocal(const std::vector<std::string>& argv, pid_t* pi
   ::fcntl(sv[0], F_SETFL, ::fcntl(sv[0], F_GETFL) | O_NONBLOCK);
   *pid_out = pid;
   return std::make_unique<LocalConn>(sv[0], pid);
+}
+
+std::unique_ptr<Conn> SocketConn(int fd) {
+  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK);
+  return std::make_unique<LocalConn>(fd, -1);
 }
 
 // ---------------------------------------------------------------------------
@@ -184,9 +194,14 @@ void WorkerPool::Add(std::unique_ptr<Conn> conn, const std::string& name) {
   workers_.push_back(std::move(w));
 }
 
+void WorkerPool::AddSource(std::unique_ptr<WorkerSource> source) {
+  sources_.push_back(std::move(source));
+}
+
 int WorkerPool::Starting() const {
   int n = 0;
   for (const Worker& w : workers_) n += w.state == State::kHello || w.state == State::kReady;
+  for (const auto& s : sources_) n += s->Expected();
   return n;
 }
 
@@ -345,28 +360,42 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
     }
     Flush(int(w), events);
   }
+  // One pollfd per worker, even where workers share an fd (the channels
+  // of one ssh session): poll reports it to each, and each reads its own
+  // channel. What one channel's read brought in for another is Buffered().
+  // Events() may read the socket (ssh), Buffered() does not: all of the
+  // first before any of the second, so that nothing read for one worker
+  // is left unseen while poll sleeps.
   std::vector<pollfd> fds;
   std::vector<int> who;
+  std::vector<int> buffered;
   for (size_t w = 0; w < workers_.size(); ++w) {
-    const Worker& wk = workers_[w];
+    Worker& wk = workers_[w];
     if (wk.state == State::kLost) continue;
-    short want = POLLIN;
-    if (wk.out_pos < wk.out.size()) want |= POLLOUT;
-    fds.push_back({wk.conn->fd(), want, 0});
+    fds.push_back({wk.conn->fd(), wk.conn->Events(wk.out_pos < wk.out.size()), 0});
     who.push_back(int(w));
   }
-  if (events->size() > before) timeout = 0;
+  const size_t nworkers = fds.size();
+  for (int w : who)
+    if (workers_[w].conn->Buffered()) buffered.push_back(w);
+  for (const auto& s : sources_) fds.push_back({s->fd(), POLLIN, 0});
+  if (events->size() > before || !buffered.empty()) timeout = 0;
   // Wake for heartbeats and deadlines even when nothing arrives.
   const double wait = std::min(timeout, opts_.heartbeat_s / 2);
   int n = ::poll(fds.data(), fds.size(), int(std::max(0.0, wait) * 1000));
+  for (int w : buffered) Receive(w, events);
   if (n <= 0) return;
-  for (size_t i = 0; i < fds.size(); ++i) {
+  for (size_t i = 0; i < nworkers; ++i) {
     if (fds[i].revents & POLLOUT) Flush(who[i], events);
-    if (fds[i].revents & (POLLIN | POLLHUP | POLLERR)) Receive(who[i], events);
+    if (workers_[who[i]].state != State::kLost && (fds[i].revents & (POLLIN | POLLHUP | POLLERR)))
+      Receive(who[i], events);
   }
+  for (size_t i = nworkers; i < fds.size(); ++i)
+    if (fds[i].revents) sources_[i - nworkers]->Take(this);
 }
 
 void WorkerPool::Shutdown() {
+  for (const auto& s : sources_) s->Stop();
   std::vector<WorkerEvent> ignored;
   for (size_t w = 0; w < workers_.size(); ++w) {
     Worker& wk = workers_[w];

@@ -73,13 +73,22 @@ class InProcessTransport : public Transport {
   ColumnStats stats_;
 };
 
-// A byte stream to one worker process: a socket or pipe pair, or (later)
-// an ssh channel. Non-blocking: Read/Write return -1 with errno EAGAIN
-// when they would block, 0 from Read at end of stream.
+// A byte stream to one worker process: a socket or pipe pair, or an ssh
+// channel. Non-blocking: Read/Write return -1 with errno EAGAIN when they
+// would block, 0 from Read at end of stream.
 class Conn {
  public:
   virtual ~Conn() = default;
-  virtual int fd() const = 0;  // to poll for reading (and writing)
+  virtual int fd() const = 0;  // to poll; several Conns may share one (ssh)
+  // The poll(2) events to wait for, asked before every poll: POLLIN, and
+  // POLLOUT when `writing` (bytes wait to be written). An ssh channel may
+  // push its session's pending output here and ask for POLLOUT on its own
+  // account, or not at all while its window is shut.
+  virtual short Events(bool writing);
+  // True when Read would return at once although the fd may not be
+  // readable: bytes or the end of the stream are buffered in this process
+  // (an ssh channel whose packets came in while a sibling channel read).
+  virtual bool Buffered() { return false; }
   virtual long Read(char* buf, size_t n) = 0;
   virtual long Write(const char* buf, size_t n) = 0;
   // Ends the stream and the process behind it; returns how it ended
@@ -87,10 +96,17 @@ class Conn {
   virtual std::string Close(bool kill) = 0;
 };
 
+// How a worker process ended with this exit status, as Close() says it.
+std::string DescribeExit(int status);
+
 // Starts `argv` (this binary with --worker, or a --worker-cmd) with a
 // socketpair on its stdin and stdout.
 std::unique_ptr<Conn> SpawnLocal(const std::vector<std::string>& argv, pid_t* pid,
                                  std::string* err);
+
+// A worker on the other end of a connected socket, started by someone
+// else (connect-back): closing it only closes the socket.
+std::unique_ptr<Conn> SocketConn(int fd);
 
 // CPU seconds used by the calling thread: what a column or the master's
 // bookkeeping costs, whatever else shares the processor.
@@ -105,6 +121,24 @@ struct PoolOptions {
   double hello_s = 30.0;     // deadline for hello + mesh build
 };
 
+class WorkerPool;
+
+// Brings workers to a pool while it runs: hosts being set up over ssh,
+// workers connecting back. Its work happens on threads of its own or in
+// Take(), never blocking the pool's poll loop for long.
+class WorkerSource {
+ public:
+  virtual ~WorkerSource() = default;
+  virtual int fd() const = 0;  // readable when Take() has something to do
+  // Adds what has arrived to the pool (WorkerPool::Add).
+  virtual void Take(WorkerPool* pool) = 0;
+  // Workers that may still come and are worth waiting for before the
+  // master concludes that it has none (hosts still being set up).
+  virtual int Expected() const = 0;
+  // No more workers: stop the threads, close the sockets.
+  virtual void Stop() = 0;
+};
+
 // Workers behind Conns, driven by poll(2) with non-blocking I/O: the
 // protocol of doc/protocol.txt, heartbeats both ways and deadlines.
 class WorkerPool : public Transport {
@@ -116,6 +150,8 @@ class WorkerPool : public Transport {
   bool SceneTooLarge() const { return scene_frame_.size() > proto::kMaxFrame; }
   // Takes a new worker; the hello and the scene are sent at once.
   void Add(std::unique_ptr<Conn> conn, const std::string& name);
+  // Polls `source` along with the workers from now on.
+  void AddSource(std::unique_ptr<WorkerSource> source);
 
   int Workers() const override { return int(workers_.size()); }
   int Starting() const override;
@@ -155,6 +191,7 @@ class WorkerPool : public Transport {
   std::vector<int32_t> edits_;          // every Divide so far, in order
   PoolOptions opts_;
   std::vector<Worker> workers_;
+  std::vector<std::unique_ptr<WorkerSource>> sources_;
   uint64_t sent_ = 0, received_ = 0;
   double epoch_;
 };

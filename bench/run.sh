@@ -53,6 +53,7 @@ if [ "$what" = all ] || [ "$what" = engine ]; then
   echo "CSV: $out_columns $out_converge"
   echo
   sh bench/waves.sh
+  bash bench/ssh.sh
 fi
 
 case $what in
