@@ -483,10 +483,10 @@ void Scheduler::Subdivide() {
   if (!sub_ || !ready_.empty()) return;
   for (const Slot& s : slots_)
     if (s.alive && !t_->InProcess() && s.Owned() < size_t(s.low)) return;
-  const double t0 = ThreadCpuSeconds();
+  const double t0 = WallNow();
   const bool over = Refine(mutable_mesh_, solver_, sub_, solver_->shots() - wave_start_, &edits_);
   if (!edits_.empty()) t_->Divide(edits_);
-  r_.subdivide_s += ThreadCpuSeconds() - t0;
+  r_.subdivide_s += WallNow() - t0;
   if (over) NextWave();
 }
 
@@ -505,10 +505,23 @@ void Scheduler::NextWave() {
 }
 
 RunResult Scheduler::Run() {
-  // The master's parts are timed in CPU seconds of this thread, so that
-  // the figures do not depend on what else runs on the machine; the time
-  // spent blocked waiting for workers is the rest of the wall time.
-  auto since = [](double t0) { return ThreadCpuSeconds() - t0; };
+  // The master's parts are timed with the monotonic clock: the thread's
+  // CPU clock is a system call (8 us on a loaded virtual machine), dearer
+  // than the work it would time, so it is read once per turn of the loop.
+  // The wall time of a turn that was not CPU time was spent blocked, in
+  // Poll waiting for workers (or preempted): counted as waiting, up to the
+  // wall time of the Poll; the rest of the Poll is receiving.
+  auto since = [](double t0) { return WallNow() - t0; };
+  double turn_wall = WallNow(), turn_cpu = ThreadCpuSeconds(), poll_s = 0;
+  auto account = [&] {
+    const double wall = WallNow(), cpu = ThreadCpuSeconds();
+    const double blocked = std::clamp((wall - turn_wall) - (cpu - turn_cpu), 0.0, poll_s);
+    r_.wait_s += blocked;
+    r_.receive_s += poll_s - blocked;
+    turn_wall = wall;
+    turn_cpu = cpu;
+    poll_s = 0;
+  };
   base_ = t_->Now();
   const long log_every =
       opts_.log_every > 0 ? opts_.log_every : std::max(1L, long(mesh_.patches.size()) / 100);
@@ -520,14 +533,13 @@ RunResult Scheduler::Run() {
       NextWave();
       unshot = solver_->UnshotFraction();
     }
+    account();
     if (Stop(unshot)) break;
     // Wait for workers only when there is nothing to shoot.
-    double t0 = ThreadCpuSeconds();
-    const double wall0 = t_->Now();
+    double t0 = WallNow();
     events.clear();
     t_->Poll(ready_.empty() ? 0.25 : 0.0, &events);
-    r_.receive_s += since(t0);
-    r_.wait_s += t_->Now() - wall0 - since(t0);
+    poll_s = since(t0);
     for (WorkerEvent& ev : events) Handle(ev);
     bool alive = false;
     for (const Slot& s : slots_) alive |= s.alive;
@@ -548,7 +560,7 @@ RunResult Scheduler::Run() {
       continue;
     }
     // Sending work comes before shooting, so that workers never starve.
-    t0 = ThreadCpuSeconds();
+    t0 = WallNow();
     Distribute();
     r_.distribute_s += since(t0);
     if (ready_.empty()) {
@@ -560,7 +572,7 @@ RunResult Scheduler::Run() {
       }
       continue;
     }
-    t0 = ThreadCpuSeconds();
+    t0 = WallNow();
     proto::Column c = std::move(ready_.front());
     ready_.pop_front();
     solver_->Shoot(c.patch, c.ff);

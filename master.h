@@ -113,12 +113,13 @@ struct RunResult {
   long shots = 0;
   double seconds = 0;
   double unshot = 0;
-  // The master's time (paper graph 1) in CPU seconds of its thread.
+  // The master's time (paper graph 1) in seconds of the monotonic clock
+  // while it works (the scheduler's loop says how blocking is told apart).
   double distribute_s = 0;  // selecting patches and queueing them
   double receive_s = 0;     // transport: reading, decoding, sending
   double shoot_s = 0;       // shooting columns
   double subdivide_s = 0;   // adaptive subdivision
-  double wait_s = 0;        // blocked waiting for workers (wall seconds)
+  double wait_s = 0;        // blocked waiting for workers (or preempted)
   // The workers' side.
   double worker_s = 0;      // Σ column compute time (CPU)
   long columns = 0;         // columns received and shot

@@ -9,10 +9,13 @@
 //  * A worker is charged the measured CPU time of its column (the hemicube
 //    and the encoding, the work a worker process does per column) times its
 //    speed factor, and times any slowdown active while it computes.
-//  * The master is charged its own measured CPU time: everything its thread
+//  * The master is charged its own measured time: everything its thread
 //    does between the return of one Poll() and the start of the next, plus
 //    the decoding of the columns Poll() hands it. Now() includes what is
 //    used so far, so the master's notion of time runs on while it works.
+//    That time is the monotonic clock's, as the real master's parts are
+//    timed (a thread CPU clock is a system call dearer than the work it
+//    would time): run the simulation on a machine that is otherwise idle.
 //  * The master's link is one shared medium that all frames, both ways,
 //    cross one after another (FIFO by the time they are sent): a frame of
 //    B bytes holds it 8B / bandwidth seconds, then arrives `latency` later.
@@ -153,7 +156,7 @@ class SimTransport : public Transport {
   std::deque<Event> inbox_;  // reached the master, not yet polled
   double now_ = 0;
   double medium_free_ = 0;  // when the link is next idle
-  double mark_;             // master thread CPU time at the last charge
+  double mark_;             // the monotonic clock at the last charge
   proto::FrameReader reader_;
   size_t ready_bytes_;       // a worker's hello and ready frames
   uint64_t sent_ = 0, received_ = 0;

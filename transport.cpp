@@ -17,11 +17,6 @@
 
 namespace {
 
-double WallNow() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 std::string DescribeStatus(int status) {
   if (WIFEXITED(status)) return DescribeExit(WEXITSTATUS(status));
   if (WIFSIGNALED(status))
@@ -79,6 +74,11 @@ short Conn::Events(bool writing) { return short(POLLIN | (writing ? POLLOUT : 0)
 std::string DescribeExit(int status) {
   if (status == 127) return "could not be started (exit status 127)";
   return "exited with status " + std::to_string(status);
+}
+
+double WallNow() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
 }
 
 double ThreadCpuSeconds() {

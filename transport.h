@@ -108,9 +108,13 @@ std::unique_ptr<Conn> SpawnLocal(const std::vector<std::string>& argv, pid_t* pi
 // else (connect-back): closing it only closes the socket.
 std::unique_ptr<Conn> SocketConn(int fd);
 
-// CPU seconds used by the calling thread: what a column or the master's
-// bookkeeping costs, whatever else shares the processor.
+// CPU seconds used by the calling thread: what a column costs, whatever
+// else shares the processor. A system call (1-10 us on a virtual
+// machine): not for timing work of a few microseconds.
 double ThreadCpuSeconds();
+
+// Seconds of the monotonic clock: no system call (tens of ns).
+double WallNow();
 
 // Path of the running executable (to start local workers from).
 std::string SelfExe();
