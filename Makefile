@@ -38,17 +38,18 @@ $(B)/radiosity-parallel: $(B)/bench/parallel.o $(B)/bench/svg.o $(LIB_OBJS)
 $(B)/radiosity-waves: $(B)/bench/waves.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
-$(B)/bench/%.o: bench/%.cpp | $(B)
+$(B)/bench/%.o: bench/%.cpp | $(B)/bench
 	$(CXX) $(CPPFLAGS) -I. $(CXXFLAGS) -c -o $@ $<
 
 $(B)/%.o: %.cpp | $(B)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c -o $@ $<
 
-$(B)/tests/%.o: tests/%.cpp | $(B)
+$(B)/tests/%.o: tests/%.cpp | $(B)/tests
 	$(CXX) $(CPPFLAGS) -I. $(shell pkg-config --cflags gtest) $(CXXFLAGS) -c -o $@ $<
 
-$(B):
-	mkdir -p $(B)/tests $(B)/bench
+# Each directory on its own: build/ may exist already (build/fuzz, build/asan).
+$(B) $(B)/tests $(B)/bench:
+	mkdir -p $@
 
 # Installs the Debian packages the build and the tests need, only if some
 # are missing (the check is dpkg's, so a machine that has them all is left
