@@ -16,7 +16,7 @@ NPROC    := $(shell nproc 2>/dev/null || echo 1)
 SAN      := -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp subdivide.cpp master.cpp results.cpp image.cpp net.cpp transport.cpp worker.cpp sim.cpp hosts.cpp sha256.cpp ssh.cpp connect.cpp
+LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp subdivide.cpp master.cpp results.cpp image.cpp net.cpp transport.cpp worker.cpp sim.cpp hosts.cpp sha256.cpp ssh.cpp connect.cpp checkpoint.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)
 LIB_OBJS  := $(LIB_SRCS:%.cpp=$(B)/%.o)
 TEST_OBJS := $(TEST_SRCS:tests/%.cpp=$(B)/tests/%.o)
@@ -38,17 +38,18 @@ $(B)/radiosity-parallel: $(B)/bench/parallel.o $(B)/bench/svg.o $(LIB_OBJS)
 $(B)/radiosity-waves: $(B)/bench/waves.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
-$(B)/bench/%.o: bench/%.cpp | $(B)
+$(B)/bench/%.o: bench/%.cpp | $(B)/bench
 	$(CXX) $(CPPFLAGS) -I. $(CXXFLAGS) -c -o $@ $<
 
 $(B)/%.o: %.cpp | $(B)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c -o $@ $<
 
-$(B)/tests/%.o: tests/%.cpp | $(B)
+$(B)/tests/%.o: tests/%.cpp | $(B)/tests
 	$(CXX) $(CPPFLAGS) -I. $(shell pkg-config --cflags gtest) $(CXXFLAGS) -c -o $@ $<
 
-$(B):
-	mkdir -p $(B)/tests $(B)/bench
+# Each directory on its own: build/ may exist already (build/fuzz, build/asan).
+$(B) $(B)/tests $(B)/bench:
+	mkdir -p $@
 
 # Installs the Debian packages the build and the tests need, only if some
 # are missing (the check is dpkg's, so a machine that has them all is left
@@ -59,6 +60,7 @@ deps:
 check: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/unit_tests
 	@$(MAKE) --no-print-directory -j$(NPROC) asan
+	@if sh fuzz/probe.sh >/dev/null; then $(MAKE) --no-print-directory -j$(NPROC) fuzz-build; fi
 	@sh tests/run.sh
 
 asan:
@@ -83,6 +85,34 @@ install: radiosity
 clean:
 	rm -rf $(B) radiosity out
 
-.PHONY: all deps check asan demo bench install clean
+# Fuzz targets (libFuzzer, clang): fuzz/*_fuzz.cpp against the loaders and
+# the protocol decoder, built with their sources under ASan + UBSan into
+# build/fuzz/. `make fuzz` runs each for FUZZ_SECONDS; `make check` for a
+# few seconds (tests/run.sh), skipped when clang or libFuzzer is missing.
+FUZZ_CXX     ?= clang++
+FUZZ_SECONDS ?= 60
+FUZZ_B       := build/fuzz
+FUZZ_SAN     := -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
+FUZZ_LIB     := $(addprefix $(FUZZ_B)/,scene.o mesh.o net.o hosts.o)
+FUZZ_BINS    := $(FUZZ_B)/scene_fuzz $(FUZZ_B)/hosts_fuzz $(FUZZ_B)/protocol_fuzz
 
--include $(wildcard $(B)/*.d $(B)/tests/*.d $(B)/bench/*.d)
+$(FUZZ_B)/%.o: %.cpp
+	@mkdir -p $(FUZZ_B)
+	$(FUZZ_CXX) $(CPPFLAGS) -std=c++17 $(FUZZ_SAN) -fsanitize=fuzzer-no-link -MMD -MP -c -o $@ $<
+
+$(FUZZ_B)/%_fuzz: fuzz/%_fuzz.cpp $(FUZZ_LIB)
+	$(FUZZ_CXX) $(CPPFLAGS) -I. -std=c++17 $(FUZZ_SAN) -fsanitize=fuzzer -o $@ $^ $(LDLIBS)
+
+$(FUZZ_B)/protocol_seeds: fuzz/protocol_seeds.cpp $(FUZZ_LIB)
+	$(FUZZ_CXX) $(CPPFLAGS) -I. -std=c++17 $(FUZZ_SAN) -o $@ $^ $(LDLIBS)
+
+fuzz-build: $(FUZZ_BINS) $(FUZZ_B)/protocol_seeds
+	@sh fuzz/seeds.sh
+
+fuzz: deps
+	@$(MAKE) --no-print-directory -j$(NPROC) fuzz-build
+	@sh fuzz/run.sh $(FUZZ_SECONDS)
+
+.PHONY: all deps check asan demo bench install clean fuzz fuzz-build
+
+-include $(wildcard $(B)/*.d $(B)/tests/*.d $(B)/bench/*.d $(FUZZ_B)/*.d)

@@ -50,6 +50,12 @@ bool ParseHost(const std::string& word, HostSpec* h, std::string* err) {
     if (close == std::string::npos) { *err = "missing ']' after IPv6 address in '" + word + "'"; return false; }
     h->name = rest.substr(1, close - 1);
     bracketed = true;
+    // Brackets hold an IPv6 address (with ':'): a name in them would lose
+    // them in FormatHost and read back as something else (fuzz/hosts_fuzz).
+    if (h->name.find(':') == std::string::npos) {
+      *err = "brackets are for IPv6 addresses, not '" + word + "'";
+      return false;
+    }
     rest = rest.substr(close + 1);
     if (!rest.empty() && rest[0] != ':') { *err = "expected ':port' after ']' in '" + word + "'"; return false; }
     has_port = !rest.empty();

@@ -229,6 +229,40 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
       b_[mesh_.elems[elems[i]].first_child + k] = shaped[kChildren * i + k];
 }
 
+SolverState Solver::State() const {
+  SolverState s;
+  s.b = b_;
+  s.unshot = unshot_;
+  s.lit = lit_;
+  s.blind = blind_;
+  s.times_shot.assign(times_shot_.begin(), times_shot_.end());
+  s.unshot_sum = unshot_sum_;
+  s.abs_sum = abs_sum_;
+  s.shots = shots_;
+  return s;
+}
+
+bool Solver::Restore(const SolverState& s, std::string* err) {
+  const size_t np = mesh_.patches.size();
+  if (s.b.size() != mesh_.elems.size() || s.unshot.size() != np || s.lit.size() != np ||
+      s.blind.size() != np || s.times_shot.size() != np) {
+    *err = "solver state of " + std::to_string(s.b.size()) + " elements and " +
+           std::to_string(s.unshot.size()) + " patches, the mesh has " +
+           std::to_string(mesh_.elems.size()) + " and " + std::to_string(np);
+    return false;
+  }
+  Grow();  // the mesh was divided since the constructor
+  b_ = s.b;
+  unshot_ = s.unshot;
+  lit_ = s.lit;
+  blind_ = s.blind;
+  times_shot_.assign(s.times_shot.begin(), s.times_shot.end());
+  unshot_sum_ = s.unshot_sum;
+  abs_sum_ = s.abs_sum;
+  shots_ = s.shots;
+  return true;
+}
+
 double Solver::UnshotFraction() const {
   if (emitted_ == 0) return 0;
   return std::max(0.0, abs_sum_) / emitted_;
@@ -289,7 +323,17 @@ class Scheduler {
             const std::function<void(const Sample&)>& sample,
             const std::function<void(const std::string&, bool)>& note)
       : mesh_(*mesh), mutable_mesh_(mesh), opts_(opts), solver_(solver), sub_(sub), t_(t),
-        first_(t), sample_(sample), note_(note), taken_(mesh->patches.size(), 0) {}
+        first_(t), sample_(sample), note_(note), taken_(mesh->patches.size(), 0) {
+    if (const RunState* r = opts.resume) {
+      wave_ = r->wave;
+      wave_start_ = r->wave_start;
+      best_ = r->best;
+      best_at_ = r->best_at;
+      before_ = r->seconds;
+      r_.columns = r->columns;
+      pending_.assign(r->pending.begin(), r->pending.end());
+    }
+  }
   RunResult Run();
 
  private:
@@ -304,6 +348,12 @@ class Scheduler {
   bool Stop(double unshot);
   void Subdivide();
   void NextWave();
+  int NextPatch();
+  RunState State();
+  void Checkpoint() {
+    if (opts_.checkpoint) opts_.checkpoint(State());
+    last_checkpoint_ = t_->Now();
+  }
   void Emit(double unshot) {
     if (sample_) sample_({Elapsed(), solver_->shots(), wave_, mesh_.LeafCount(), unshot});
   }
@@ -327,8 +377,45 @@ class Scheduler {
   int wave_ = 1;
   long wave_start_ = 0;               // shots before this wave
   std::vector<int32_t> edits_;
+  std::deque<int> pending_;           // RunState::pending of a resumed run
+  double last_checkpoint_ = 0;        // on t_'s clock
   RunResult r_;
 };
+
+// The next patch to hand out: first those a resumed run's checkpoint had
+// selected and not shot, then the one with the most power to shoot.
+int Scheduler::NextPatch() {
+  while (!pending_.empty()) {
+    const int p = pending_.front();
+    pending_.pop_front();
+    if (p >= 0 && size_t(p) < taken_.size() && !taken_[p]) return p;
+  }
+  return solver_->Select(&taken_);
+}
+
+RunState Scheduler::State() {
+  RunState s;
+  s.wave = wave_;
+  s.wave_start = wave_start_;
+  s.best = best_;
+  s.best_at = best_at_;
+  s.seconds = Elapsed();
+  s.columns = r_.columns;
+  // Columns waiting are shot first; then the workers' patches, sent before
+  // prepared, taken in turns as their columns would come back.
+  for (const proto::Column& c : ready_) s.pending.push_back(c.patch);
+  for (size_t i = 0;; ++i) {
+    bool any = false;
+    for (const Slot& w : slots_) {
+      if (!w.alive || i >= w.Owned()) continue;
+      any = true;
+      s.pending.push_back(i < w.sent.size() ? w.sent[i].a.patch : w.prepared[i - w.sent.size()]);
+    }
+    if (!any) break;
+  }
+  for (int p : pending_) s.pending.push_back(p);
+  return s;
+}
 
 // Queue sizes (paper §4.1: "3-10 patches according to network size").
 // depth covers the measured round trip: while one column travels back and
@@ -415,7 +502,7 @@ void Scheduler::Distribute() {
     more = false;
     for (Slot& s : slots_) {
       if (!s.alive || s.Owned() >= size_t(s.high)) continue;
-      const int p = solver_->Select(&taken_);
+      const int p = NextPatch();
       if (p < 0) break;  // nothing left with power to shoot: send what is prepared
       taken_[p] = 1;
       s.prepared.push_back(p);
@@ -526,7 +613,8 @@ RunResult Scheduler::Run() {
   const long log_every =
       opts_.log_every > 0 ? opts_.log_every : std::max(1L, long(mesh_.patches.size()) / 100);
   double unshot = solver_->UnshotFraction();
-  Emit(unshot);
+  if (!opts_.resume) Emit(unshot);
+  last_checkpoint_ = t_->Now();
   std::vector<WorkerEvent> events;
   for (;;) {
     if (unshot < opts_.epsilon && sub_ && sub_->WaveOver(true)) {
@@ -555,7 +643,7 @@ RunResult Scheduler::Run() {
       fallback_ = std::make_unique<InProcessTransport>(mesh_, opts_.resolution, opts_.rotate,
                                                        opts_.seed);
       t_ = fallback_.get();
-      base_ = t_->Now();
+      base_ = last_checkpoint_ = t_->Now();
       slots_.clear();
       continue;
     }
@@ -583,7 +671,10 @@ RunResult Scheduler::Run() {
     if (solver_->shots() % log_every == 0) Emit(unshot);
     Subdivide();
     unshot = solver_->UnshotFraction();
+    if (opts_.checkpoint_every > 0 && t_->Now() - last_checkpoint_ >= opts_.checkpoint_every)
+      Checkpoint();
   }
+  Checkpoint();  // before the last sample, which a resumed run then writes
   if (solver_->shots() % log_every != 0) Emit(unshot);  // the last state, once
   r_.shots = solver_->shots();
   r_.seconds = Elapsed();

@@ -8,7 +8,9 @@
 #ifndef RADIOSITY_MASTER_H
 #define RADIOSITY_MASTER_H
 
+#include <cmath>
 #include <csignal>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -18,6 +20,18 @@
 #include "hemicube.h"
 #include "mesh.h"
 #include "subdivide.h"
+
+// Everything a Solver holds that is not derived from the mesh: what a
+// checkpoint keeps (checkpoint.h) to go on later exactly where it stood.
+struct SolverState {
+  std::vector<glm::dvec3> b;          // per element (divided ones too)
+  std::vector<glm::dvec3> unshot;     // per patch
+  std::vector<uint8_t> lit, blind;    // per patch
+  std::vector<int32_t> times_shot;    // per patch
+  glm::dvec3 unshot_sum{0.0};         // the running sums as they are, drift
+  double abs_sum = 0;                 // included, so that a resumed run
+  long shots = 0;                     // makes the same choices bit for bit
+};
 
 class Solver {
  public:
@@ -57,6 +71,11 @@ class Solver {
   const std::vector<glm::dvec3>& unshot() const { return unshot_; } // per patch
   glm::dvec3 Ambient() const;  // the overshooting estimate before ρ
 
+  SolverState State() const;
+  // Takes a State() of a solver of this mesh (divided alike since): false
+  // with *err when the sizes do not match the mesh.
+  bool Restore(const SolverState& s, std::string* err);
+
  private:
   glm::dvec3 ToShoot(int p) const;
   void Resum();
@@ -81,6 +100,21 @@ class Solver {
   long shots_ = 0;
 };
 
+// Where a run stands besides the solver and the subdivider: the rest of
+// what a checkpoint keeps, so that RunMaster can go on from there.
+struct RunState {
+  int wave = 1;
+  long wave_start = 0;       // shots before this wave
+  double best = HUGE_VAL;    // stall detection: lowest unshot fraction of
+  long best_at = 0;          // the wave, and the shot it was reached at
+  double seconds = 0;        // run time so far
+  long columns = 0;          // columns shot
+  // Patches selected and not yet shot (owned by workers, columns waiting),
+  // in about the order they would have been shot: handed out first on
+  // resume, so that a sequential run goes on in exactly its own order.
+  std::vector<int32_t> pending;
+};
+
 struct RunOptions {
   bool overshoot = true;
   int resolution = 256;     // hemicube pixels across
@@ -95,6 +129,14 @@ struct RunOptions {
   // Called at the end of every wave but the last (whose end is the run's),
   // before its radiosity is thrown away. May be empty.
   std::function<void(int wave)> wave_end;
+  // Checkpoints: `checkpoint` (may be empty) is called every
+  // `checkpoint_every` seconds between shots (0: never) and once when the
+  // run stops, before the last log sample, with where the run stands.
+  double checkpoint_every = 0;
+  std::function<void(const RunState&)> checkpoint;
+  // Go on from a checkpoint's state (the solver, subdivider and mesh
+  // already restored): no first log sample, the clock and waves go on.
+  const RunState* resume = nullptr;
 };
 
 struct Sample {

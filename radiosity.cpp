@@ -1,11 +1,13 @@
 // radiosity: main, options and usage. Everything else lives in the modules
 // (scene, mesh, hemicube, master, transport, net, worker, results, image);
 // see README.md.
+#include <fcntl.h>
 #include <getopt.h>
 #include <sys/stat.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -15,6 +17,7 @@
 #include <string>
 #include <unistd.h>
 
+#include "checkpoint.h"
 #include "connect.h"
 #include "hosts.h"
 #include "image.h"
@@ -76,6 +79,11 @@ const char kUsage[] =
     "      --no-rotate        keep the hemicube aligned (default: turned per shot)\n"
     "      --seed N           seed of the hemicube turns (default 1)\n"
     "      --log-every N      shots between log.csv rows (default: patches / 100)\n"
+    "      --checkpoint FILE  save the run's state in FILE every --checkpoint-every\n"
+    "                         seconds and when it stops (written to FILE.tmp, renamed)\n"
+    "      --checkpoint-every SEC  seconds between checkpoints (default 30)\n"
+    "      --resume FILE      go on from checkpoint FILE (same scene and options;\n"
+    "                         -e, -s, -t and the output may differ)\n"
     "      --camera \"ex ey ez tx ty tz fov\"\n"
     "      --size WxH         picture size (default 512x512)\n"
     "      --format png|ppm   picture format (default png)\n"
@@ -158,6 +166,7 @@ int main(int argc, char** argv) {
     kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
     kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
     kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect,
+    kCheckpoint, kCheckpointEvery, kResume,
   };
   static const option kLong[] = {
       {"out", required_argument, nullptr, 'o'},
@@ -189,6 +198,9 @@ int main(int argc, char** argv) {
       {"no-rotate", no_argument, nullptr, kNoRotate},
       {"seed", required_argument, nullptr, kSeed},
       {"log-every", required_argument, nullptr, kLogEvery},
+      {"checkpoint", required_argument, nullptr, kCheckpoint},
+      {"checkpoint-every", required_argument, nullptr, kCheckpointEvery},
+      {"resume", required_argument, nullptr, kResume},
       {"camera", required_argument, nullptr, kCamera},
       {"size", required_argument, nullptr, kSize},
       {"format", required_argument, nullptr, kFormat},
@@ -207,6 +219,8 @@ int main(int argc, char** argv) {
   long workers = std::max(1L, sysconf(_SC_NPROCESSORS_ONLN));
   bool worker_mode = false, workers_given = false, dump_hosts = false;
   std::string worker_cmd, hosts_file, listen, secret_file, connect;
+  std::string checkpoint_file, resume_file;
+  double checkpoint_every = 30;
   PoolOptions pool_opts;
   SshOptions ssh_opts;
   opterr = 0;
@@ -249,6 +263,11 @@ int main(int argc, char** argv) {
       case kNoRotate: run.rotate = false; break;
       case kSeed: run.seed = unsigned(Integer("--seed", optarg, 0, 0xFFFFFFFFL)); break;
       case kLogEvery: run.log_every = Integer("--log-every", optarg, 1, 1L << 50); break;
+      case kCheckpoint: checkpoint_file = optarg; break;
+      case kCheckpointEvery:
+        checkpoint_every = Number("--checkpoint-every", optarg, 0.001, 1e9);
+        break;
+      case kResume: resume_file = optarg; break;
       case kCamera: camera_text = optarg; break;
       case kSize: {
         int n = 0;
@@ -337,9 +356,29 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "radiosity: %zu faces, %zu patches, %zu elements (patch size %g)\n",
                  scene.faces.size(), mesh.patches.size(), mesh.elems.size(), mesh.patch_size);
 
+  // A checkpoint to resume is checked before anything is started; one to
+  // write must be writable before the run starts.
+  sub_opts.threshold = std::max(sub_opts.threshold, sub_opts.floor);
+  const SolveOptions solve{run.overshoot, run.resolution, run.rotate, run.seed,
+                           run.log_every,  mesh_opts,      subdivide,  sub_opts};
+  const RunIdentity identity = Identify(scene, mesh, solve);
+  Checkpoint resume;
+  if (!resume_file.empty()) {
+    if (!ReadCheckpoint(resume_file, &resume, &err)) Die(kExitUsage, err);
+    if (!CheckIdentity(resume, identity, &err)) Die(kExitUsage, resume_file + ": " + err);
+  }
+  if (!checkpoint_file.empty()) {
+    const std::string tmp = checkpoint_file + ".tmp";
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) Die(kExitFailure, "--checkpoint: " + tmp + ": " + std::strerror(errno));
+    ::close(fd);
+    ::unlink(tmp.c_str());
+  }
+
   if (!MakeDirs(out_dir, &err)) Die(kExitFailure, err);
   LogCsv log;
   if (!log.Open(out_dir + "/log.csv", &err)) Die(kExitFailure, err);
+  if (!resume_file.empty()) log.Restore(resume.log);
 
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
@@ -374,7 +413,6 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", wave, mesh.LeafCount());
   };
   run.wave_end = frame;
-  sub_opts.threshold = std::max(sub_opts.threshold, sub_opts.floor);
   std::unique_ptr<Subdivider> subdivider;
   if (subdivide) subdivider = std::make_unique<Subdivider>(&mesh, sub_opts);
   const long built = mesh.LeafCount();
@@ -425,6 +463,30 @@ int main(int argc, char** argv) {
       pool->AddSource(std::move(listener));
     }
     transport = std::move(pool);
+  }
+  if (!resume_file.empty()) {
+    // Workers got the mesh as built; the divisions follow the scene.
+    if (!ApplyCheckpoint(resume, &mesh, &solver, subdivider.get(), &err))
+      Die(kExitUsage, resume_file + ": " + err);
+    transport->Divide(resume.edits);
+    run.resume = &resume.run;
+    if (verbosity >= 2)
+      std::fprintf(stderr, "radiosity: resumed from %s: %ld shots, wave %d, %ld elements\n",
+                   resume_file.c_str(), solver.shots(), resume.run.wave, mesh.LeafCount());
+  }
+  if (!checkpoint_file.empty()) {
+    run.checkpoint_every = checkpoint_every;
+    run.checkpoint = [&](const RunState& state) {
+      const auto t0 = std::chrono::steady_clock::now();
+      size_t bytes = 0;
+      const Checkpoint c = Capture(identity, mesh, solver, subdivider.get(), state, log.rows());
+      if (!WriteCheckpoint(checkpoint_file, c, &bytes, &err))
+        std::fprintf(stderr, "radiosity: warning: checkpoint not written: %s\n", err.c_str());
+      else if (verbosity >= 2)
+        std::fprintf(stderr, "radiosity: checkpoint %s: %zu bytes at %ld shots in %.1f ms\n",
+                     checkpoint_file.c_str(), bytes, solver.shots(),
+                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    };
   }
   RunResult result =
       RunMaster(&mesh, run, &solver, subdivider.get(), transport.get(), sample, note);

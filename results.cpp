@@ -162,9 +162,18 @@ bool LogCsv::Open(const std::string& path, std::string* err) {
 }
 
 void LogCsv::Row(const Sample& s, const double* rms, const double* rel_rms) {
-  std::fprintf(f_, "%.6f,%ld,%d,%ld,%.6g,", s.seconds, s.shots, s.wave, s.elements, s.unshot);
-  if (rms) std::fprintf(f_, "%.6g,%.6g\n", *rms, *rel_rms);
-  else std::fprintf(f_, ",\n");
+  char buf[256];
+  int n = std::snprintf(buf, sizeof buf, "%.6f,%ld,%d,%ld,%.6g,", s.seconds, s.shots, s.wave,
+                        s.elements, s.unshot);
+  if (rms) std::snprintf(buf + n, sizeof buf - size_t(n), "%.6g,%.6g\n", *rms, *rel_rms);
+  else std::snprintf(buf + n, sizeof buf - size_t(n), ",\n");
+  std::fputs(buf, f_);
+  rows_ += buf;
+}
+
+void LogCsv::Restore(const std::string& rows) {
+  std::fputs(rows.c_str(), f_);
+  rows_ = rows;
 }
 
 bool LogCsv::Close(std::string* err) {

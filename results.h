@@ -49,10 +49,15 @@ class LogCsv {
   bool Open(const std::string& path, std::string* err);
   void Row(const Sample& s, const double* rms, const double* rel_rms);
   bool Close(std::string* err);
+  // The rows written so far, without the header (for a checkpoint); and
+  // rows of an earlier part of the run, written as they are (--resume).
+  const std::string& rows() const { return rows_; }
+  void Restore(const std::string& rows);
 
  private:
   std::FILE* f_ = nullptr;
   std::string path_;
+  std::string rows_;
 };
 
 // Leaf elements with radiosity averaged to their vertices (inside one face;

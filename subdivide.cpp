@@ -117,3 +117,27 @@ void Subdivider::StartWave(const Mesh& mesh) {
   last_pass_ = -1;
   quiet_ = false;
 }
+
+SubdividerState Subdivider::State() const {
+  SubdividerState s;
+  s.threshold = threshold_;
+  s.last_pass = last_pass_;
+  s.wave_start_leaves = wave_start_leaves_;
+  s.divided_in_wave = divided_in_wave_;
+  s.finished = finished_;
+  s.quiet = quiet_;
+  s.passes = passes_;
+  s.seconds = seconds_;
+  return s;
+}
+
+void Subdivider::Restore(const SubdividerState& s) {
+  threshold_ = s.threshold;
+  last_pass_ = s.last_pass;
+  wave_start_leaves_ = s.wave_start_leaves;
+  divided_in_wave_ = s.divided_in_wave;
+  finished_ = s.finished;
+  quiet_ = s.quiet;
+  passes_ = s.passes;
+  seconds_ = s.seconds;
+}

@@ -40,6 +40,15 @@ struct SubdivideOptions {
   double quiet = 0.002;    // a pass dividing under this fraction of the leaves is quiet
 };
 
+// A Subdivider's state between passes (checkpoint.h).
+struct SubdividerState {
+  double threshold = 0;
+  long last_pass = -1, wave_start_leaves = 0, divided_in_wave = 0;
+  bool finished = false, quiet = false;
+  long passes = 0;
+  double seconds = 0;
+};
+
 class Subdivider {
  public:
   // Connects the mesh's edges (ConnectEdges) for the neighbour search.
@@ -75,6 +84,9 @@ class Subdivider {
   // loop measured it.
   void CountTime(double seconds) { seconds_ += seconds; }
   double seconds() const { return seconds_; }
+
+  SubdividerState State() const;
+  void Restore(const SubdividerState& s);
 
  private:
   SubdivideOptions opts_;

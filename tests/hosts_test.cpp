@@ -63,6 +63,22 @@ TEST(Hosts, Ipv6InBrackets) {
   EXPECT_EQ(FormatHost(h[0]), "[::1]:2200 slots=1");
 }
 
+// Found by fuzz/hosts_fuzz: "[name]" without a ':' parsed as the name
+// "name", which --dump-hosts printed without brackets, so that the output
+// did not read back as the same host (here '%' is bad outside brackets).
+TEST(Hosts, BracketsOnlyForIpv6) {
+  EXPECT_EQ(Error("bob@[node1%eth0]\n"),
+            "hosts.txt:1: brackets are for IPv6 addresses, not 'bob@[node1%eth0]'");
+  EXPECT_EQ(Error("[node1]:22\n"), "hosts.txt:1: brackets are for IPv6 addresses, not '[node1]:22'");
+  for (const char* text : {"[::1]:2200\n", "bob@[fe80::1%eth0] slots=3 cmd=/x\n"}) {
+    auto h = Parse(text);
+    ASSERT_EQ(h.size(), 1u);
+    auto again = Parse(FormatHost(h[0]) + "\n");
+    ASSERT_EQ(again.size(), 1u);
+    EXPECT_EQ(FormatHost(again[0]), FormatHost(h[0]));
+  }
+}
+
 TEST(Hosts, EmptyTextIsNoHosts) { EXPECT_TRUE(Parse("# nothing\n\n").empty()); }
 
 TEST(Hosts, ErrorsNameFileAndLine) {

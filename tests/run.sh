@@ -2,7 +2,8 @@
 # Runs every test: the unit tests (gtest), each end-to-end tests/*.sh on the
 # real binary, and the man page lint; then the unit tests and a reduced set
 # of end-to-end tests again on the AddressSanitizer + UndefinedBehavior-
-# Sanitizer build in build/asan (any report fails the test). A shell test
+# Sanitizer build in build/asan (any report fails the test); and the fuzz
+# targets for a few seconds each (fuzz/run.sh). A shell test
 # passes with exit 0, is skipped with 77 and fails otherwise. Ends with
 # "N passed, N failed, N skipped".
 cd "$(dirname "$0")/.." || exit 1
@@ -67,6 +68,20 @@ if out=$(groff -man -ww -z man/radiosity.1 2>&1) && [ -z "$out" ]; then
   passed=$((passed + 1))
 else
   failed=$((failed + 1)); echo "FAIL: groff -man -ww -z man/radiosity.1"; echo "$out"
+fi
+
+# Each fuzz target (fuzz/) for a few seconds on its seeds, and the inputs
+# that once crashed one (fuzz/regressions/) replayed. `make fuzz` runs
+# them longer.
+echo "== fuzz (${FUZZ_CHECK_SECONDS:-5} s per target)"
+if why=$(sh fuzz/probe.sh); then
+  if sh fuzz/run.sh "${FUZZ_CHECK_SECONDS:-5}"; then
+    passed=$((passed + 1)); echo "-- passed: fuzz"
+  else
+    failed=$((failed + 1)); echo "-- FAILED: fuzz"
+  fi
+else
+  skipped=$((skipped + 1)); echo "-- skipped: fuzz ($why)"
 fi
 
 if [ -x build/asan/radiosity ] && [ -x build/asan/unit_tests ]; then

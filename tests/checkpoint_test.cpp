@@ -1,0 +1,302 @@
+// Checkpoints (checkpoint.h): the file format round trip; truncated,
+// corrupt, foreign and other-version files refused with their reason; the
+// division history read off a mesh; and a run resumed from any of its
+// checkpoints ends with exactly the radiosity of the run uninterrupted.
+#include "checkpoint.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "net.h"
+#include "test_util.h"
+
+namespace {
+
+// A small light over a square occluder and a floor: a sharp shadow, so
+// that the run divides and goes through waves.
+Scene ShadowScene() {
+  Scene s = EmptyScene();
+  AddFace(&s, {{-1, -1, 0}, {2, -1, 0}, {2, 2, 0}, {-1, 2, 0}}, glm::dvec3(0.6), glm::dvec3(0));
+  AddFace(&s, {{0.3, 0.3, 1}, {0.3, 0.7, 1}, {0.7, 0.7, 1}, {0.7, 0.3, 1}}, glm::dvec3(0.5),
+          glm::dvec3(0));
+  AddFace(&s, {{0.3, 0.3, 1.001}, {0.7, 0.3, 1.001}, {0.7, 0.7, 1.001}, {0.3, 0.7, 1.001}},
+          glm::dvec3(0.5), glm::dvec3(0));
+  AddFace(&s, {{0.48, 0.48, 2}, {0.48, 0.52, 2}, {0.52, 0.52, 2}, {0.52, 0.48, 2}}, glm::dvec3(0),
+          glm::dvec3(100));
+  return s;
+}
+
+MeshOptions ShadowMesh() {
+  MeshOptions o;
+  o.patch_size = 0.5;
+  return o;
+}
+
+RunOptions Options() {
+  RunOptions o;
+  o.resolution = 64;
+  o.epsilon = 1e-3;
+  return o;
+}
+
+SolveOptions Solve(const RunOptions& r, const MeshOptions& m) {
+  SolveOptions s;
+  s.overshoot = r.overshoot;
+  s.resolution = r.resolution;
+  s.rotate = r.rotate;
+  s.seed = r.seed;
+  s.mesh = m;
+  return s;
+}
+
+// A checkpoint with something in every field.
+Checkpoint Filled() {
+  Checkpoint c;
+  c.scene_hash = std::string(32, 'h');
+  c.base_hash = 0x1122334455667788ull;
+  c.base_elements = 12;
+  c.mesh_hash = 99;
+  c.elements = 16;
+  c.patches = 3;
+  c.options.resolution = 128;
+  c.options.seed = 7;
+  c.options.mesh.patch_size = 0.25;
+  c.options.sub.max_level = 3;
+  c.edits = {4, 0, 13};
+  c.solver.b = {glm::dvec3(1, 2, 3), glm::dvec3(-0.0, 1e-300, 4.5)};
+  c.solver.unshot = {glm::dvec3(0.5), glm::dvec3(0.25), glm::dvec3(0)};
+  c.solver.lit = {1, 0, 1};
+  c.solver.blind = {0, 0, 1};
+  c.solver.times_shot = {3, 0, 1};
+  c.solver.unshot_sum = glm::dvec3(0.1, 0.2, 0.3);
+  c.solver.abs_sum = 0.6;
+  c.solver.shots = 4;
+  c.has_subdivider = true;
+  c.subdivider.threshold = 0.35;
+  c.subdivider.last_pass = 40;
+  c.subdivider.wave_start_leaves = 12;
+  c.subdivider.divided_in_wave = 3;
+  c.subdivider.quiet = true;
+  c.subdivider.passes = 2;
+  c.subdivider.seconds = 0.01;
+  c.run.wave = 2;
+  c.run.wave_start = 30;
+  c.run.best = HUGE_VAL;
+  c.run.best_at = 31;
+  c.run.seconds = 1.5;
+  c.run.columns = 4;
+  c.run.pending = {2, 1};
+  c.log = "0.000000,0,1,12,1,,\n";
+  return c;
+}
+
+std::string Error(const std::string& bytes) {
+  Checkpoint c;
+  std::string err;
+  EXPECT_FALSE(DecodeCheckpoint(bytes, &c, &err));
+  return err;
+}
+
+TEST(Checkpoint, RoundTrip) {
+  const Checkpoint a = Filled();
+  const std::string bytes = EncodeCheckpoint(a);
+  EXPECT_EQ(bytes.substr(0, 8), "RADCKPT\n");
+  Checkpoint b;
+  std::string err;
+  ASSERT_TRUE(DecodeCheckpoint(bytes, &b, &err)) << err;
+  EXPECT_EQ(EncodeCheckpoint(b), bytes);
+  EXPECT_EQ(b.scene_hash, a.scene_hash);
+  EXPECT_EQ(b.edits, a.edits);
+  EXPECT_EQ(b.solver.b, a.solver.b);
+  EXPECT_TRUE(std::signbit(b.solver.b[1].x));
+  EXPECT_EQ(b.solver.times_shot, a.solver.times_shot);
+  EXPECT_EQ(b.subdivider.threshold, 0.35);
+  EXPECT_TRUE(b.subdivider.quiet);
+  EXPECT_EQ(b.run.best, HUGE_VAL);
+  EXPECT_EQ(b.run.pending, a.run.pending);
+  EXPECT_EQ(b.log, a.log);
+  EXPECT_EQ(CompareOptions(a.options, b.options), "");
+}
+
+TEST(Checkpoint, TruncatedAtAnyLengthIsRefused) {
+  const std::string bytes = EncodeCheckpoint(Filled());
+  for (size_t n = 0; n < bytes.size(); ++n) {
+    const std::string err = Error(bytes.substr(0, n));
+    if (n < 8) {
+      EXPECT_EQ(err, "not a radiosity checkpoint (no RADCKPT magic)") << n;
+    } else {
+      EXPECT_EQ(err.rfind("truncated: ", 0), 0u) << n << ": " << err;
+    }
+  }
+  EXPECT_EQ(Error(bytes + "x").rfind("bytes after the end: ", 0), 0u);
+}
+
+TEST(Checkpoint, EveryFlippedByteIsRefused) {
+  const std::string bytes = EncodeCheckpoint(Filled());
+  for (size_t i = 0; i < bytes.size(); ++i) {
+    std::string bad = bytes;
+    bad[i] = char(bad[i] ^ 0x20);
+    const std::string err = Error(bad);
+    EXPECT_FALSE(err.empty()) << i;
+    if (i >= 24) {
+      EXPECT_EQ(err, "corrupt: the SHA-256 checksum does not match") << i;
+    }
+  }
+}
+
+TEST(Checkpoint, ForeignAndOtherVersionsAreRefused) {
+  std::mt19937 rng(5);
+  std::string noise(4096, '\0');
+  for (char& c : noise) c = char(rng());
+  EXPECT_EQ(Error(noise), "not a radiosity checkpoint (no RADCKPT magic)");
+  EXPECT_EQ(Error(""), "not a radiosity checkpoint (no RADCKPT magic)");
+  std::string v2 = EncodeCheckpoint(Filled());
+  v2[8] = 2;
+  EXPECT_EQ(Error(v2), "checkpoint format version 2, this radiosity reads 1");
+}
+
+TEST(Checkpoint, OptionsAreCompared) {
+  SolveOptions a, b;
+  EXPECT_EQ(CompareOptions(a, b), "");
+  b.resolution = 128;
+  EXPECT_EQ(CompareOptions(a, b), "--resolution 256 (this run: 128)");
+  b = a;
+  b.overshoot = false;
+  EXPECT_EQ(CompareOptions(a, b), "--no-overshoot not given (this run: given)");
+  b = a;
+  b.mesh.patch_size = 0.5;
+  EXPECT_EQ(CompareOptions(a, b), "--patch-size default (this run: 0.5)");
+  b = a;
+  b.sub.max_level = 4;
+  EXPECT_EQ(CompareOptions(a, b), "--max-level 2 (this run: 4)");
+  a.subdivide = b.subdivide = false;  // then the subdivision limits do not matter
+  EXPECT_EQ(CompareOptions(a, b), "");
+}
+
+TEST(Checkpoint, FileIsWrittenAtomicallyAndReadBack) {
+  char dir[] = "/tmp/checkpoint_test.XXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  const std::string path = std::string(dir) + "/ck";
+  size_t bytes = 0;
+  std::string err;
+  ASSERT_TRUE(WriteCheckpoint(path, Filled(), &bytes, &err)) << err;
+  EXPECT_EQ(bytes, EncodeCheckpoint(Filled()).size());
+  EXPECT_NE(access((path + ".tmp").c_str(), F_OK), 0);  // renamed
+  Checkpoint c;
+  ASSERT_TRUE(ReadCheckpoint(path, &c, &err)) << err;
+  EXPECT_EQ(c.edits, Filled().edits);
+  EXPECT_FALSE(ReadCheckpoint(std::string(dir) + "/none", &c, &err));
+  EXPECT_EQ(err, std::string(dir) + "/none: No such file or directory");
+  EXPECT_FALSE(WriteCheckpoint(std::string(dir) + "/no/such/dir", Filled(), &bytes, &err));
+  EXPECT_EQ(err, std::string(dir) + "/no/such/dir.tmp: No such file or directory");
+  std::remove(path.c_str());
+  rmdir(dir);
+}
+
+TEST(Checkpoint, DivideHistoryReplaysToTheSameMesh) {
+  const Scene s = ShadowScene();
+  Mesh m = MakeMesh(s, ShadowMesh());
+  const Mesh built = m;
+  // Divide in an order that is not increasing, children of children too.
+  Divide(&m, 7);
+  Divide(&m, 2);
+  Divide(&m, m.elems[7].first_child + 1);
+  Divide(&m, 0);
+  const std::vector<int32_t> edits = DivideHistory(m);
+  EXPECT_EQ(edits, (std::vector<int32_t>{7, 2, m.elems[7].first_child + 1, 0}));
+  Mesh again = built;
+  std::string err;
+  ASSERT_TRUE(ReplayDivisions(&again, edits, &err)) << err;
+  EXPECT_EQ(proto::MeshHash(again), proto::MeshHash(m));
+  Mesh bad = built;
+  EXPECT_FALSE(ReplayDivisions(&bad, {2, 2}, &err));
+  EXPECT_EQ(err, "division 2 of 2 names element 2, which is not a leaf of the mesh");
+  EXPECT_FALSE(ReplayDivisions(&bad, {-1}, &err));
+}
+
+TEST(Checkpoint, IdentityRefusesAnotherSceneAndOtherOptions) {
+  const Scene s = ShadowScene();
+  const Mesh m = MakeMesh(s, ShadowMesh());
+  const RunIdentity id = Identify(s, m, Solve(Options(), ShadowMesh()));
+  Checkpoint c;
+  c.scene_hash = id.scene_hash;
+  c.base_hash = id.base_hash;
+  c.base_elements = id.base_elements;
+  c.options = id.options;
+  c.has_subdivider = true;
+  std::string err;
+  EXPECT_TRUE(CheckIdentity(c, id, &err)) << err;
+  Scene other = s;
+  other.materials[4].ke = glm::dvec3(50);  // the light, dimmer
+  EXPECT_FALSE(CheckIdentity(c, Identify(other, m, id.options), &err));
+  EXPECT_EQ(err, "a checkpoint of another scene (its faces or materials differ)");
+  SolveOptions o = id.options;
+  o.seed = 2;
+  EXPECT_FALSE(CheckIdentity(c, Identify(s, m, o), &err));
+  EXPECT_EQ(err, "made with other options: --seed 1 (this run: 2); resume with the options of "
+                 "that run");
+}
+
+struct ShadowRun {
+  explicit ShadowRun(const Scene& s) : mesh(MakeMesh(s, ShadowMesh())), solver(mesh, true),
+                                 sub(&mesh, SubdivideOptions()) {}
+  Mesh mesh;
+  Solver solver;
+  Subdivider sub;
+};
+
+// The run of the shadow scene, checkpointed after every shot, and resumed
+// from a checkpoint in each wave and from the last one: the resumed runs
+// end with the uninterrupted run's radiosity, bit for bit, and its log.
+TEST(Checkpoint, ResumedRunEndsExactlyLikeTheWholeRun) {
+  const Scene s = ShadowScene();
+  const RunIdentity id = Identify(s, MakeMesh(s, ShadowMesh()), Solve(Options(), ShadowMesh()));
+  ShadowRun whole(s);
+  std::vector<std::string> saved;
+  std::vector<int> wave_of;
+  std::vector<long> log;  // shots of each sample
+  RunOptions o = Options();
+  o.checkpoint_every = 1e-12;  // after every shot
+  o.checkpoint = [&](const RunState& st) {
+    saved.push_back(EncodeCheckpoint(Capture(id, whole.mesh, whole.solver, &whole.sub, st, "")));
+    wave_of.push_back(st.wave);
+  };
+  RunResult r = RunSequential(&whole.mesh, o, &whole.solver, &whole.sub,
+                              [&](const Sample& x) { log.push_back(x.shots); });
+  ASSERT_EQ(r.status, RunStatus::kConverged);
+  ASSERT_GE(r.waves, 2);
+  ASSERT_GT(whole.mesh.LeafCount(), long(MakeMesh(s, ShadowMesh()).elems.size()));
+  ASSERT_EQ(long(saved.size()), r.shots + 1);  // each shot, and the end
+  std::vector<size_t> from = {saved.size() / 5, saved.size() - 1};
+  for (size_t i = 1; i < saved.size(); ++i)
+    if (wave_of[i] != wave_of[i - 1]) from.push_back(i + 3);
+  for (size_t i : from) {
+    SCOPED_TRACE("resumed from checkpoint " + std::to_string(i));
+    ASSERT_LT(i, saved.size());
+    Checkpoint c;
+    std::string err;
+    ASSERT_TRUE(DecodeCheckpoint(saved[i], &c, &err)) << err;
+    ShadowRun part(s);
+    ASSERT_TRUE(CheckIdentity(c, id, &err)) << err;
+    ASSERT_TRUE(ApplyCheckpoint(c, &part.mesh, &part.solver, &part.sub, &err)) << err;
+    RunOptions p = Options();
+    p.resume = &c.run;
+    std::vector<long> rest;
+    RunResult q = RunSequential(&part.mesh, p, &part.solver, &part.sub,
+                                [&](const Sample& x) { rest.push_back(x.shots); });
+    EXPECT_EQ(q.status, RunStatus::kConverged);
+    EXPECT_EQ(q.shots, r.shots);
+    EXPECT_EQ(q.waves, r.waves);
+    EXPECT_EQ(proto::MeshHash(part.mesh), proto::MeshHash(whole.mesh));
+    EXPECT_TRUE(part.solver.radiosity() == whole.solver.radiosity());
+    // The samples after the checkpoint are the whole run's last ones.
+    ASSERT_LE(rest.size(), log.size());
+    EXPECT_TRUE(std::equal(rest.begin(), rest.end(), log.end() - long(rest.size())));
+  }
+}
+
+}  // namespace
