@@ -13,6 +13,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <utility>
 #include <unistd.h>
 
 #include "connect.h"
@@ -359,17 +360,24 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "radiosity: warning: %s: no face emits light (Ke); every B is 0\n",
                  scene_path.c_str());
   // A picture of the solution as it stands: the end of a wave, the final one.
-  auto picture = [&](const std::string& path) {
+  // The last wave's frame and final.png are the same picture: shaded and
+  // rendered once (on a 200,000-face scene each costs seconds).
+  auto picture = [&](const std::vector<std::string>& paths) {
     ShadedMesh shaded = Shade(mesh, solver.radiosity());
     Image img;
     Render(shaded, camera, width, height, &img);
-    if (!WriteImage(img, AutoExposure(shaded), path, format, &err)) Die(kExitFailure, err);
-    return shaded;
+    const float exposure = AutoExposure(shaded);
+    for (const std::string& path : paths)
+      if (!WriteImage(img, exposure, path, format, &err)) Die(kExitFailure, err);
+    return std::make_pair(std::move(shaded), exposure);
   };
-  auto frame = [&](int wave) {
+  auto frame_name = [&](int wave) {
     char name[32];
     std::snprintf(name, sizeof name, "/frame-%02d.", wave);
-    picture(out_dir + name + format);
+    return out_dir + name + format;
+  };
+  auto frame = [&](int wave) {
+    picture({frame_name(wave)});
     if (verbosity >= 2)
       std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", wave, mesh.LeafCount());
   };
@@ -449,9 +457,10 @@ int main(int argc, char** argv) {
 
   std::vector<glm::dvec3> face_b = FaceRadiosity(mesh, solver.radiosity());
   if (!WriteResultCsv(out_dir + "/result.csv", scene, face_b, &err)) Die(kExitFailure, err);
-  frame(result.waves);
-  ShadedMesh shaded = picture(out_dir + "/final." + format);
-  if (!WritePly(shaded, AutoExposure(shaded), out_dir + "/result.ply", &err))
+  const auto shaded = picture({frame_name(result.waves), out_dir + "/final." + format});
+  if (verbosity >= 2)
+    std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", result.waves, mesh.LeafCount());
+  if (!WritePly(shaded.first, shaded.second, out_dir + "/result.ply", &err))
     Die(kExitFailure, err);
 
   if (result.status == RunStatus::kLimit)  // said even with -q: these are not converged numbers
