@@ -18,6 +18,13 @@ struct ShadedMesh {
   std::vector<std::array<int, 4>> polys;  // vertex ids, CCW; [3] < 0: triangle
 };
 
+// Picture size limits (--size): a side at most kMaxImageSide and the whole
+// at most kMaxImagePixels, 8192 x 8192. Rendering and writing take about
+// 18 bytes per pixel (a float RGB and a float depth per pixel, the 8-bit
+// copy, the PNG encoder's buffers), so about 1.2 GB at the limit.
+constexpr int kMaxImageSide = 16384;
+constexpr long kMaxImagePixels = 1L << 26;
+
 struct Image {
   int width = 0, height = 0;
   std::vector<glm::vec3> pixels;  // linear radiosity, row 0 at the top

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <csignal>
@@ -252,11 +253,24 @@ int main(int argc, char** argv) {
       case kLogEvery: run.log_every = Integer("--log-every", optarg, 1, 1L << 50); break;
       case kCamera: camera_text = optarg; break;
       case kSize: {
-        int n = 0;
-        if (std::sscanf(optarg, "%dx%d%n", &width, &height, &n) != 2 || optarg[n])
+        // strtol, not sscanf("%d"): a number past int is then refused, not
+        // undefined.
+        char* x = nullptr;
+        char* end = nullptr;
+        errno = 0;
+        const long w = std::strtol(optarg, &x, 10);
+        if (x == optarg || *x != 'x' || !std::isdigit((unsigned char)x[1]))
           BadOption("--size", optarg, "expected WIDTHxHEIGHT");
-        if (width < 1 || height < 1 || width > 16384 || height > 16384)
-          BadOption("--size", optarg, "width and height must be from 1 to 16384");
+        const long h = std::strtol(x + 1, &end, 10);
+        if (*end || errno == ERANGE) BadOption("--size", optarg, "expected WIDTHxHEIGHT");
+        if (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide)
+          BadOption("--size", optarg,
+                    ("width and height must be from 1 to " + std::to_string(kMaxImageSide)).c_str());
+        if (w * h > kMaxImagePixels)
+          BadOption("--size", optarg,
+                    ("at most " + std::to_string(kMaxImagePixels) + " pixels (8192x8192)").c_str());
+        width = int(w);
+        height = int(h);
         break;
       }
       case kFormat:
@@ -463,6 +477,9 @@ int main(int argc, char** argv) {
   if (!WritePly(shaded.first, shaded.second, out_dir + "/result.ply", &err))
     Die(kExitFailure, err);
 
+  if (subdivider && subdivider->capped())
+    std::fprintf(stderr, "radiosity: warning: subdivision stopped at %ld elements: the next "
+                         "pass would pass the limit of %d\n", long(mesh.elems.size()), kMaxElements);
   if (result.status == RunStatus::kLimit)  // said even with -q: these are not converged numbers
     std::fprintf(stderr,
                  "radiosity: warning: did not converge: %s with unshot energy %.3g of "
