@@ -14,6 +14,7 @@
 // radiosity (RGB) at every vertex, interpolated across (Gouraud).
 struct ShadedMesh {
   std::vector<glm::dvec3> positions;
+  // float: only drawn, after exposure, into 8 bits; positions stay double.
   std::vector<glm::vec3> colors;          // linear radiosity, >= 0
   std::vector<std::array<int, 4>> polys;  // vertex ids, CCW; [3] < 0: triangle
 };
@@ -27,7 +28,7 @@ constexpr long kMaxImagePixels = 1L << 26;
 
 struct Image {
   int width = 0, height = 0;
-  std::vector<glm::vec3> pixels;  // linear radiosity, row 0 at the top
+  std::vector<glm::vec3> pixels;  // linear radiosity, row 0 at the top (float: 8-bit output)
 };
 
 // A camera that frames the box [lo, hi], looking at it from the front
