@@ -24,9 +24,12 @@
 #          B = [1,2]x[0,1]x[0,1] sharing A's wall x=1 (coincident faces
 #          back to back, floors and ceilings touching along an edge) and
 #          C = [1,2]x[1,2]x[1,2] touching A at the corner (1,1,1) only.
-#          Faces: 0..8 room A (ceiling 0..3 + light 4? no: see below).
+#          Faces: 0..8 A's ceiling (4 = light), 9 A's floor, 10..13 A's
+#          walls; 14..19 room B, 20..25 room C (ceiling, floor, 4 walls).
 #   big    a unit room whose floor is an n x n grid of quads (default
-#          n = 448: 200,704 floor faces + 5 walls and a light).
+#          n = 448: 200,704 floor faces, 4 walls and a ceiling light).
+# Other variables: sliver (thin: the sliver's width, default 1e-4), kd and
+# kd2 (thin: the walls' and the white plates' Kd, default 0.5 and 0.8).
 function P(x, y, z) {
   printf "v %.17g %.17g %.17g\n", x * scale, y * scale, z * scale
   return ++nv
