@@ -14,13 +14,21 @@
 // radiosity (RGB) at every vertex, interpolated across (Gouraud).
 struct ShadedMesh {
   std::vector<glm::dvec3> positions;
+  // float: only drawn, after exposure, into 8 bits; positions stay double.
   std::vector<glm::vec3> colors;          // linear radiosity, >= 0
   std::vector<std::array<int, 4>> polys;  // vertex ids, CCW; [3] < 0: triangle
 };
 
+// Picture size limits (--size): a side at most kMaxImageSide and the whole
+// at most kMaxImagePixels, 8192 x 8192. Rendering and writing take about
+// 18 bytes per pixel (a float RGB and a float depth per pixel, the 8-bit
+// copy, the PNG encoder's buffers), so about 1.2 GB at the limit.
+constexpr int kMaxImageSide = 16384;
+constexpr long kMaxImagePixels = 1L << 26;
+
 struct Image {
   int width = 0, height = 0;
-  std::vector<glm::vec3> pixels;  // linear radiosity, row 0 at the top
+  std::vector<glm::vec3> pixels;  // linear radiosity, row 0 at the top (float: 8-bit output)
 };
 
 // A camera that frames the box [lo, hi], looking at it from the front

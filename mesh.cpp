@@ -205,8 +205,10 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
   }
   if (estimate > kMaxElements) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "patch size %g would make about %.3g elements (limit %d)", ps,
-                  estimate, kMaxElements);
+    std::snprintf(buf, sizeof buf,
+                  "%zu faces at patch size %g and %d elements per patch edge would make "
+                  "about %.3g elements (limit %d)",
+                  scene.faces.size(), ps, epp, estimate, kMaxElements);
     *err = buf;
     return false;
   }

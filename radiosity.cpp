@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -15,6 +16,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <utility>
 #include <unistd.h>
 
 #include "checkpoint.h"
@@ -270,11 +272,24 @@ int main(int argc, char** argv) {
       case kResume: resume_file = optarg; break;
       case kCamera: camera_text = optarg; break;
       case kSize: {
-        int n = 0;
-        if (std::sscanf(optarg, "%dx%d%n", &width, &height, &n) != 2 || optarg[n])
+        // strtol, not sscanf("%d"): a number past int is then refused, not
+        // undefined.
+        char* x = nullptr;
+        char* end = nullptr;
+        errno = 0;
+        const long w = std::strtol(optarg, &x, 10);
+        if (x == optarg || *x != 'x' || !std::isdigit((unsigned char)x[1]))
           BadOption("--size", optarg, "expected WIDTHxHEIGHT");
-        if (width < 1 || height < 1 || width > 16384 || height > 16384)
-          BadOption("--size", optarg, "width and height must be from 1 to 16384");
+        const long h = std::strtol(x + 1, &end, 10);
+        if (*end || errno == ERANGE) BadOption("--size", optarg, "expected WIDTHxHEIGHT");
+        if (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide)
+          BadOption("--size", optarg,
+                    ("width and height must be from 1 to " + std::to_string(kMaxImageSide)).c_str());
+        if (w * h > kMaxImagePixels)
+          BadOption("--size", optarg,
+                    ("at most " + std::to_string(kMaxImagePixels) + " pixels (8192x8192)").c_str());
+        width = int(w);
+        height = int(h);
         break;
       }
       case kFormat:
@@ -398,17 +413,24 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "radiosity: warning: %s: no face emits light (Ke); every B is 0\n",
                  scene_path.c_str());
   // A picture of the solution as it stands: the end of a wave, the final one.
-  auto picture = [&](const std::string& path) {
+  // The last wave's frame and final.png are the same picture: shaded and
+  // rendered once (on a 200,000-face scene each costs seconds).
+  auto picture = [&](const std::vector<std::string>& paths) {
     ShadedMesh shaded = Shade(mesh, solver.radiosity());
     Image img;
     Render(shaded, camera, width, height, &img);
-    if (!WriteImage(img, AutoExposure(shaded), path, format, &err)) Die(kExitFailure, err);
-    return shaded;
+    const float exposure = AutoExposure(shaded);
+    for (const std::string& path : paths)
+      if (!WriteImage(img, exposure, path, format, &err)) Die(kExitFailure, err);
+    return std::make_pair(std::move(shaded), exposure);
   };
-  auto frame = [&](int wave) {
+  auto frame_name = [&](int wave) {
     char name[32];
     std::snprintf(name, sizeof name, "/frame-%02d.", wave);
-    picture(out_dir + name + format);
+    return out_dir + name + format;
+  };
+  auto frame = [&](int wave) {
+    picture({frame_name(wave)});
     if (verbosity >= 2)
       std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", wave, mesh.LeafCount());
   };
@@ -511,11 +533,15 @@ int main(int argc, char** argv) {
 
   std::vector<glm::dvec3> face_b = FaceRadiosity(mesh, solver.radiosity());
   if (!WriteResultCsv(out_dir + "/result.csv", scene, face_b, &err)) Die(kExitFailure, err);
-  frame(result.waves);
-  ShadedMesh shaded = picture(out_dir + "/final." + format);
-  if (!WritePly(shaded, AutoExposure(shaded), out_dir + "/result.ply", &err))
+  const auto shaded = picture({frame_name(result.waves), out_dir + "/final." + format});
+  if (verbosity >= 2)
+    std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", result.waves, mesh.LeafCount());
+  if (!WritePly(shaded.first, shaded.second, out_dir + "/result.ply", &err))
     Die(kExitFailure, err);
 
+  if (subdivider && subdivider->capped())
+    std::fprintf(stderr, "radiosity: warning: subdivision stopped at %ld elements: the next "
+                         "pass would pass the limit of %d\n", long(mesh.elems.size()), kMaxElements);
   if (result.status == RunStatus::kLimit)  // said even with -q: these are not converged numbers
     std::fprintf(stderr,
                  "radiosity: warning: did not converge: %s with unshot energy %.3g of "

@@ -23,9 +23,12 @@ namespace {
 
 // Far beyond any scene this program can solve, but small enough that the
 // limit is reported instead of ending in bad_alloc.
-constexpr long kMaxVertices = 50000000;
-constexpr long kMaxFaces = 50000000;
-constexpr long kMaxCorners = 200000000;
+// Every face becomes at least one element, so more faces than the mesh's
+// element cap (kMaxElements, mesh.h) could never run: refused while
+// reading, before the faces alone fill the memory (about 150 bytes each).
+constexpr long kMaxVertices = 32000000;
+constexpr long kMaxFaces = 8000000;
+constexpr long kMaxCorners = 64000000;
 constexpr size_t kMaxLine = size_t{256} << 20;
 
 // Planarity: the largest distance of a vertex from the face's plane may be

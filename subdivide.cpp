@@ -101,6 +101,12 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::d
     finished_ = true;
     out.clear();
   }
+  // The element cap (memory, and ids that fit the protocol's int32): the
+  // whole pass or nothing, so grading is never left half done.
+  if (long(n) + kChildren * long(out.size()) > opts_.max_elements) {
+    finished_ = capped_ = true;
+    out.clear();
+  }
   divided_in_wave_ += long(out.size());
   threshold_ = std::max(opts_.floor, threshold_ * opts_.decay);
   return out;

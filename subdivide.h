@@ -38,6 +38,9 @@ struct SubdivideOptions {
   double wave_fraction = 0.2;  // of the wave's starting elements divided
   long between = 10;       // shots between passes (at least 10)
   double quiet = 0.002;    // a pass dividing under this fraction of the leaves is quiet
+  // Elements (mesh.elems, divided ones included) a pass may not go past:
+  // a pass that would is dropped and subdivision ends (capped()).
+  long max_elements = kMaxElements;
 };
 
 // A Subdivider's state between passes (checkpoint.h).
@@ -79,6 +82,8 @@ class Subdivider {
   // A pass at the floor threshold found little to divide (under `quiet` of
   // the leaves; it then divides nothing): no more passes.
   bool finished() const { return finished_; }
+  // Subdivision ended because a pass would have passed max_elements.
+  bool capped() const { return capped_; }
   long passes() const { return passes_; }
   // Time spent dividing (policy, Divide, Solver::Divided), as the run
   // loop measured it.
@@ -96,6 +101,7 @@ class Subdivider {
   long wave_start_leaves_ = 0;
   long divided_in_wave_ = 0;
   bool finished_ = false;
+  bool capped_ = false;
   bool quiet_ = false;        // the last pass divided under `quiet` of the leaves
   long passes_ = 0;
   double seconds_ = 0;

@@ -71,6 +71,10 @@ bad_option -e -1 "$CB"
 bad_option -s 0 "$CB"
 bad_option --size 0x10 "$CB"
 bad_option --size 1000000x1000000 "$CB"
+bad_option --size 16384x16384 "$CB"            # each side legal, too many pixels
+bad_option --size 99999999999999999999x2 "$CB" # past long: refused, not wrapped
+bad_option --patch-size 1e-4 "$CB"             # the element cap, before any allocation
+bad_option --elements 65 "$CB"
 bad_option --format gif "$CB"
 bad_option --camera "1 2 3" "$CB"
 bad_option --patch-size 0 "$CB"

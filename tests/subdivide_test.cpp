@@ -355,4 +355,23 @@ TEST(Subdivider, WithoutWavesOneWave) {
   EXPECT_GT(m.LeafCount(), int(m.patches.size()) * 4);
 }
 
+// The element cap: a pass that would pass max_elements divides nothing and
+// ends subdivision; the run still converges on the mesh it has.
+TEST(Subdivider, StopsAtTheElementCap) {
+  Scene s = ShadowScene();
+  MeshOptions o;
+  o.patch_size = 0.25;
+  Mesh m = MakeMesh(s, o);
+  const size_t built = m.elems.size();
+  Solver solver(m, true);
+  SubdivideOptions so;
+  so.max_elements = long(built) + 2 * kChildren;  // room for two divisions, not a pass
+  Subdivider sub(&m, so);
+  RunResult r = Adaptive(&m, &solver, &sub, 1e-3);
+  EXPECT_EQ(r.status, RunStatus::kConverged);
+  EXPECT_TRUE(sub.capped());
+  EXPECT_TRUE(sub.finished());
+  EXPECT_EQ(m.elems.size(), built);
+}
+
 }  // namespace
