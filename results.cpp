@@ -162,6 +162,8 @@ bool LogCsv::Open(const std::string& path, std::string* err) {
 }
 
 void LogCsv::Row(const Sample& s, const double* rms, const double* rel_rms) {
+  rows_.push_back({s.seconds, s.shots, s.wave, s.elements, s.unshot, rms ? *rms : NAN,
+                   rel_rms ? *rel_rms : NAN});
   std::fprintf(f_, "%.6f,%ld,%d,%ld,%.6g,", s.seconds, s.shots, s.wave, s.elements, s.unshot);
   if (rms) std::fprintf(f_, "%.6g,%.6g\n", *rms, *rel_rms);
   else std::fprintf(f_, ",\n");

@@ -42,17 +42,29 @@ void RmsError(const Scene& scene, const std::vector<glm::dvec3>& face_b,
 void FieldError(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const Mesh& ref,
                 const std::vector<glm::dvec3>& ref_b, double* rms, double* rel_rms);
 
-// log.csv, a row per progress sample.
+// One row of log.csv; rms and rel_rms are NaN without a reference.
+struct LogRow {
+  double seconds;
+  long shots;
+  int wave;
+  long elements;
+  double unshot, rms, rel_rms;
+};
+
+// log.csv, a row per progress sample. The rows are kept too, for the
+// error chart drawn at the end (error.svg).
 class LogCsv {
  public:
   ~LogCsv();
   bool Open(const std::string& path, std::string* err);
   void Row(const Sample& s, const double* rms, const double* rel_rms);
   bool Close(std::string* err);
+  const std::vector<LogRow>& rows() const { return rows_; }
 
  private:
   std::FILE* f_ = nullptr;
   std::string path_;
+  std::vector<LogRow> rows_;
 };
 
 // Leaf elements with radiosity averaged to their vertices (inside one face;
