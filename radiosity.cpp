@@ -16,10 +16,12 @@
 #include <unistd.h>
 
 #include "connect.h"
+#include "errorchart.h"
 #include "hosts.h"
 #include "image.h"
 #include "master.h"
 #include "mesh.h"
+#include "progress.h"
 #include "results.h"
 #include "scene.h"
 #include "ssh.h"
@@ -44,6 +46,11 @@ enum ExitStatus {
 // (-j 1000000) from forking without end.
 constexpr long kMaxLocalWorkers = 256;
 
+// --converge's epsilon unless -e says otherwise: a hundred times below the
+// default, so that a run to the default is measured against an answer
+// about 1% of its own error away.
+constexpr double kConvergeEpsilon = 1e-5;
+
 const char kUsage[] =
     "usage: radiosity [options] SCENE.obj\n"
     "  -o, --out DIR          where results go (default: out)\n"
@@ -65,6 +72,8 @@ const char kUsage[] =
     "  -t, --time SEC         stop after SEC seconds\n"
     "      --no-overshoot     plain progressive refinement\n"
     "      --reference CSV    log RMS error against a converged result.csv\n"
+    "      --converge CSV     solve to epsilon 1e-5 (or -e) and also save result.csv\n"
+    "                         as CSV, a reference for --reference\n"
     "      --patch-size L     largest patch edge (default: scene diagonal / 16)\n"
     "      --elements N       elements per patch edge (default 2)\n"
     "      --no-subdivide     keep the mesh as built (default: divide where light changes)\n"
@@ -79,7 +88,7 @@ const char kUsage[] =
     "      --camera \"ex ey ez tx ty tz fov\"\n"
     "      --size WxH         picture size (default 512x512)\n"
     "      --format png|ppm   picture format (default png)\n"
-    "  -q, --quiet            no messages but errors and warnings\n"
+    "  -q, --quiet            no progress, no messages but errors and warnings\n"
     "  -v, --verbose          a line per progress sample\n"
     "      --version          print the version\n"
     "  -h, --help             this help\n"
@@ -157,7 +166,7 @@ int main(int argc, char** argv) {
     kNoOvershoot = 256, kReference, kPatchSize, kElements, kNoRotate, kSeed,
     kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
     kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
-    kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect,
+    kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect, kConverge,
   };
   static const option kLong[] = {
       {"out", required_argument, nullptr, 'o'},
@@ -178,6 +187,7 @@ int main(int argc, char** argv) {
       {"time", required_argument, nullptr, 't'},
       {"no-overshoot", no_argument, nullptr, kNoOvershoot},
       {"reference", required_argument, nullptr, kReference},
+      {"converge", required_argument, nullptr, kConverge},
       {"patch-size", required_argument, nullptr, kPatchSize},
       {"elements", required_argument, nullptr, kElements},
       {"no-subdivide", no_argument, nullptr, kNoSubdivide},
@@ -198,7 +208,8 @@ int main(int argc, char** argv) {
       {"help", no_argument, nullptr, 'h'},
       {nullptr, 0, nullptr, 0},
   };
-  std::string out_dir = "out", reference, camera_text, format = "png";
+  std::string out_dir = "out", reference, converge, camera_text, format = "png";
+  bool epsilon_given = false;
   RunOptions run;
   MeshOptions mesh_opts;
   SubdivideOptions sub_opts;
@@ -233,11 +244,15 @@ int main(int argc, char** argv) {
         if (run.resolution % 2) BadOption("--resolution", optarg, "must be even");
         break;
       }
-      case 'e': run.epsilon = Number("--epsilon", optarg, 1e-15, 1); break;
+      case 'e':
+        run.epsilon = Number("--epsilon", optarg, 1e-15, 1);
+        epsilon_given = true;
+        break;
       case 's': run.max_shots = Integer("--shots", optarg, 1, 1L << 50); break;
       case 't': run.max_seconds = Number("--time", optarg, 1e-3, 1e9); break;
       case kNoOvershoot: run.overshoot = false; break;
       case kReference: reference = optarg; break;
+      case kConverge: converge = optarg; break;
       case kPatchSize: mesh_opts.patch_size = Number("--patch-size", optarg, 1e-300, 1e300); break;
       case kElements: mesh_opts.elements_per_patch = int(Integer("--elements", optarg, 1, 64)); break;
       case kNoSubdivide: subdivide = false; break;
@@ -317,6 +332,7 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
   const std::string scene_path = argv[optind];
+  if (!converge.empty() && !epsilon_given) run.epsilon = kConvergeEpsilon;
 
   std::vector<std::string> warnings;
   Scene scene;
@@ -345,10 +361,16 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, OnSignal);
   run.stop = &g_stop;
   Solver solver(mesh, run.overshoot);
+  // Progress: a line redrawn in place on a terminal, else a line every 2 s
+  // (a log file or a batch system's output should not fill with \r).
+  const bool terminal = isatty(2);
+  Progress progress([](const std::string& text) { std::fputs(text.c_str(), stderr); }, terminal,
+                    run.epsilon, terminal ? 0.25 : 2.0);
   auto sample = [&](const Sample& s) {
     double rms = 0, rel = 0;
     if (!ref.empty()) RmsError(scene, FaceRadiosity(mesh, solver.radiosity()), ref, &rms, &rel);
     log.Row(s, ref.empty() ? nullptr : &rms, ref.empty() ? nullptr : &rel);
+    if (verbosity == 1) progress.Update(s, ref.empty() ? nullptr : &rms, ref.empty() ? nullptr : &rel);
     if (verbosity >= 2) {
       std::fprintf(stderr, "radiosity: %8.2f s %7ld shots  unshot %.3e", s.seconds, s.shots, s.unshot);
       if (!ref.empty()) std::fprintf(stderr, "  rms %.3e (%.3f%%)", rms, 100 * rel);
@@ -378,8 +400,11 @@ int main(int argc, char** argv) {
   std::unique_ptr<Subdivider> subdivider;
   if (subdivide) subdivider = std::make_unique<Subdivider>(&mesh, sub_opts);
   const long built = mesh.LeafCount();
+  // Workers joining, lost or skipped: above the progress line; -q keeps
+  // only the warnings.
   auto note = [&](const std::string& line, bool warning) {
-    if (warning || verbosity >= 2) std::fprintf(stderr, "radiosity: %s\n", line.c_str());
+    if (verbosity == 1) progress.Note(line);
+    else if (warning || verbosity >= 2) std::fprintf(stderr, "radiosity: %s\n", line.c_str());
   };
   std::unique_ptr<Transport> transport;
   if (workers == 0 && !remote) {
@@ -429,6 +454,7 @@ int main(int argc, char** argv) {
   RunResult result =
       RunMaster(&mesh, run, &solver, subdivider.get(), transport.get(), sample, note);
   transport->Shutdown();
+  progress.Finish();
   if (verbosity >= 2)
     std::fprintf(stderr,
                  "radiosity: master: %.3f s distributing, %.3f s receiving, %.3f s shooting, "
@@ -441,6 +467,11 @@ int main(int argc, char** argv) {
                  double(result.bytes_sent) / std::max(1L, result.shots),
                  double(result.bytes_received) / std::max(1L, result.shots));
   if (!log.Close(&err)) Die(kExitFailure, err);
+  // Drawn even when the run failed: how it went is what one wants to see.
+  const std::string scene_name = scene_path.substr(scene_path.rfind('/') + 1);
+  if (!WriteErrorChart(out_dir + "/error.svg", scene_name + ": error against run time",
+                       log.rows(), &err))
+    Die(kExitFailure, err);
   if (result.status == RunStatus::kNoWorkers)
     Die(kExitFailure, result.why + "; no results written");
   if (result.status == RunStatus::kNotConverged)
@@ -451,8 +482,22 @@ int main(int argc, char** argv) {
   if (!WriteResultCsv(out_dir + "/result.csv", scene, face_b, &err)) Die(kExitFailure, err);
   frame(result.waves);
   ShadedMesh shaded = picture(out_dir + "/final." + format);
-  if (!WritePly(shaded, AutoExposure(shaded), out_dir + "/result.ply", &err))
+  if (!WritePly(shaded, AutoExposure(shaded), out_dir + "/result.ply", &err) ||
+      !WriteGltf(shaded, AutoExposure(shaded), out_dir + "/result.gltf", out_dir + "/result.bin",
+                 &err))
     Die(kExitFailure, err);
+  if (!converge.empty()) {
+    // A reference must be converged: one cut short by -s, -t or a signal
+    // would pass its own error on to every run measured against it.
+    if (result.status != RunStatus::kConverged)
+      Die(kExitFailure, "--converge " + converge + ": not written, the run did not converge (" +
+                            (result.why.empty() ? std::string("stopped on request") : result.why) +
+                            ")");
+    if (!WriteResultCsv(converge, scene, face_b, &err)) Die(kExitFailure, err);
+    if (verbosity >= 1)
+      std::fprintf(stderr, "radiosity: reference (epsilon %g) in %s: use --reference %s\n",
+                   run.epsilon, converge.c_str(), converge.c_str());
+  }
 
   if (result.status == RunStatus::kLimit)  // said even with -q: these are not converged numbers
     std::fprintf(stderr,
