@@ -94,7 +94,7 @@ const char kUsage[] =
     "  -h, --help             this help\n"
     "       radiosity --worker   speak the worker protocol on stdin/stdout\n"
     "       radiosity --worker --connect HOST:PORT --secret FILE\n"
-    "                            the same with a master that --listens\n";
+    "                            the same with a master started with --listen\n";
 
 volatile std::sig_atomic_t g_stop = 0;
 
