@@ -75,6 +75,13 @@ bench: deps
 	  $(B)/radiosity-waves
 	@sh bench/run.sh
 
+# The paper's measurements with this machine's cores, written up as
+# bench/results/report.md (about 10 minutes; run it on an idle machine).
+report: deps
+	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
+	  $(B)/radiosity-waves
+	@sh bench/report
+
 install: radiosity
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/share/man/man1
 	install -m 755 radiosity $(DESTDIR)$(PREFIX)/bin/radiosity
@@ -83,6 +90,6 @@ install: radiosity
 clean:
 	rm -rf $(B) radiosity out
 
-.PHONY: all deps check asan demo bench install clean
+.PHONY: all deps check asan demo bench report install clean
 
 -include $(wildcard $(B)/*.d $(B)/tests/*.d $(B)/bench/*.d)
