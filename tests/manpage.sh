@@ -40,7 +40,9 @@ for f in $files; do
   grep -q -- "$f" <<<"$out" && pass "OUTPUT FILES describes $f" || fail "OUTPUT FILES lacks $f"
 done
 
-# make install: PREFIX/share/man/man1, where man -w finds it.
+# make install: PREFIX/share/man/man1, where man -w finds it. Under make
+# check this runs inside make: its jobserver and flags are not ours.
+unset MAKEFLAGS MFLAGS MAKELEVEL
 if make -C "$TOP" -q radiosity 2>/dev/null; then
   make -C "$TOP" --no-print-directory install DESTDIR="$T/root" PREFIX=/usr/local >"$T/install.log" 2>&1
   page=$T/root/usr/local/share/man/man1/radiosity.1
