@@ -16,7 +16,7 @@ NPROC    := $(shell nproc 2>/dev/null || echo 1)
 SAN      := -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp subdivide.cpp master.cpp results.cpp image.cpp net.cpp transport.cpp worker.cpp sim.cpp hosts.cpp sha256.cpp ssh.cpp connect.cpp checkpoint.cpp
+LIB_SRCS  := scene.cpp mesh.cpp hemicube.cpp subdivide.cpp master.cpp results.cpp image.cpp net.cpp transport.cpp worker.cpp sim.cpp hosts.cpp sha256.cpp ssh.cpp connect.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)
 LIB_OBJS  := $(LIB_SRCS:%.cpp=$(B)/%.o)
 TEST_OBJS := $(TEST_SRCS:tests/%.cpp=$(B)/tests/%.o)
@@ -32,7 +32,7 @@ $(B)/unit_tests: $(TEST_OBJS) $(LIB_OBJS)
 $(B)/radiosity-bench: $(B)/bench/bench.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
-$(B)/radiosity-parallel: $(B)/bench/parallel.o $(B)/bench/svg.o $(LIB_OBJS)
+$(B)/radiosity-parallel: $(B)/bench/parallel.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 $(B)/radiosity-waves: $(B)/bench/waves.o $(LIB_OBJS)
@@ -77,6 +77,13 @@ bench: deps
 	  $(B)/radiosity-waves
 	@sh bench/run.sh
 
+# The paper's measurements with this machine's cores, written up as
+# bench/results/report.md (about 10 minutes; run it on an idle machine).
+report: deps
+	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
+	  $(B)/radiosity-waves
+	@sh bench/report
+
 install: radiosity
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/share/man/man1
 	install -m 755 radiosity $(DESTDIR)$(PREFIX)/bin/radiosity
@@ -113,6 +120,6 @@ fuzz: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) fuzz-build
 	@sh fuzz/run.sh $(FUZZ_SECONDS)
 
-.PHONY: all deps check asan demo bench install clean fuzz fuzz-build
+.PHONY: all deps check asan demo bench report install clean fuzz fuzz-build
 
 -include $(wildcard $(B)/*.d $(B)/tests/*.d $(B)/bench/*.d $(FUZZ_B)/*.d)

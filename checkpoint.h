@@ -79,7 +79,7 @@ struct Checkpoint {
   bool has_subdivider = false;
   SubdividerState subdivider;
   RunState run;
-  std::string log;  // log.csv rows (LogCsv::rows())
+  std::string log;  // log.csv rows (LogCsv::text())
 };
 
 // SHA-256 of what identifies a scene's answer: its faces (vertices,

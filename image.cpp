@@ -191,6 +191,20 @@ uint8_t Encode(float linear, float exposure) {
   return uint8_t(std::lround(s * 255));
 }
 
+// The body of a JSON string: quotes, backslashes and control characters escaped.
+std::string JsonString(const std::string& s) {
+  std::string out;
+  for (unsigned char c : s) {
+    if (c == '"' || c == '\\') out += '\\', out += char(c);
+    else if (c < 0x20) {
+      char u[8];
+      std::snprintf(u, sizeof u, "\\u%04x", c);
+      out += u;
+    } else out += char(c);
+  }
+  return out;
+}
+
 // Writes the whole file or nothing is left behind: "PATH: strerror".
 bool WriteFile(const std::string& path, const void* data, size_t size,
                std::string* err) {
@@ -415,4 +429,72 @@ bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
     s += line;
   }
   return WriteFile(path, s.data(), s.size(), err);
+}
+
+bool WriteGltf(const ShadedMesh& mesh, float exposure, const std::string& gltf_path,
+               const std::string& bin_path, std::string* err) {
+  CheckPolys(mesh);
+  const size_t n = mesh.positions.size();
+  std::vector<float> pos, col;
+  std::vector<uint32_t> idx;
+  pos.reserve(3 * n);
+  col.reserve(3 * n);
+  float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
+  for (size_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) {
+      const float p = float(mesh.positions[i][k]);
+      pos.push_back(p);
+      lo[k] = std::min(lo[k], p);
+      hi[k] = std::max(hi[k], p);
+      const float c = mesh.colors[i][k] * exposure;
+      col.push_back(c > 0 ? std::min(c, 1.0f) : 0.0f);  // also NaN to 0
+    }
+  for (const auto& q : mesh.polys) {
+    idx.insert(idx.end(), {uint32_t(q[0]), uint32_t(q[1]), uint32_t(q[2])});
+    if (q[3] >= 0) idx.insert(idx.end(), {uint32_t(q[0]), uint32_t(q[2]), uint32_t(q[3])});
+  }
+  // glTF buffers are little-endian, as is every machine this builds on
+  // (x86-64, arm64); the values are copied as they lie in memory.
+  const size_t pos_bytes = pos.size() * 4, col_bytes = col.size() * 4, idx_bytes = idx.size() * 4;
+  std::vector<char> bin(pos_bytes + col_bytes + idx_bytes);
+  if (pos_bytes) std::memcpy(bin.data(), pos.data(), pos_bytes);
+  if (col_bytes) std::memcpy(bin.data() + pos_bytes, col.data(), col_bytes);
+  if (idx_bytes) std::memcpy(bin.data() + pos_bytes + col_bytes, idx.data(), idx_bytes);
+  if (n == 0) lo[0] = lo[1] = lo[2] = hi[0] = hi[1] = hi[2] = 0;
+
+  const size_t slash = bin_path.rfind('/');
+  const std::string uri = slash == std::string::npos ? bin_path : bin_path.substr(slash + 1);
+  char buf[2048];
+  std::snprintf(
+      buf, sizeof buf,
+      "{\n"
+      "  \"asset\": {\"version\": \"2.0\", \"generator\": \"radiosity\"},\n"
+      "  \"extensionsUsed\": [\"KHR_materials_unlit\"],\n"
+      "  \"scene\": 0,\n"
+      "  \"scenes\": [{\"nodes\": [0]}],\n"
+      "  \"nodes\": [{\"mesh\": 0, \"name\": \"radiosity\"}],\n"
+      "  \"materials\": [{\"name\": \"radiosity\", \"pbrMetallicRoughness\": "
+      "{\"baseColorFactor\": [1, 1, 1, 1], \"metallicFactor\": 0, \"roughnessFactor\": 1}, "
+      "\"extensions\": {\"KHR_materials_unlit\": {}}}],\n"
+      "  \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"COLOR_0\": 1}, "
+      "\"indices\": 2, \"material\": 0, \"mode\": 4}]}],\n"
+      "  \"buffers\": [{\"uri\": \"%s\", \"byteLength\": %zu}],\n"
+      "  \"bufferViews\": [\n"
+      "    {\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": %zu, \"target\": 34962},\n"
+      "    {\"buffer\": 0, \"byteOffset\": %zu, \"byteLength\": %zu, \"target\": 34962},\n"
+      "    {\"buffer\": 0, \"byteOffset\": %zu, \"byteLength\": %zu, \"target\": 34963}\n"
+      "  ],\n"
+      "  \"accessors\": [\n"
+      "    {\"bufferView\": 0, \"componentType\": 5126, \"count\": %zu, \"type\": \"VEC3\", "
+      "\"min\": [%.9g, %.9g, %.9g], \"max\": [%.9g, %.9g, %.9g]},\n"
+      "    {\"bufferView\": 1, \"componentType\": 5126, \"count\": %zu, \"type\": \"VEC3\"},\n"
+      "    {\"bufferView\": 2, \"componentType\": 5125, \"count\": %zu, \"type\": \"SCALAR\"}\n"
+      "  ]\n"
+      "}\n",
+      JsonString(uri).c_str(), bin.size(), pos_bytes, pos_bytes, col_bytes, pos_bytes + col_bytes,
+      idx_bytes, n, double(lo[0]), double(lo[1]), double(lo[2]), double(hi[0]), double(hi[1]),
+      double(hi[2]), n, idx.size());
+  const std::string json = buf;
+  return WriteFile(bin_path, bin.data(), bin.size(), err) &&
+         WriteFile(gltf_path, json.data(), json.size(), err);
 }

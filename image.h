@@ -54,4 +54,13 @@ bool WriteImage(const Image& img, float exposure, const std::string& path,
 bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
               std::string* err);
 
+// glTF 2.0: GLTF_PATH (JSON) and BIN_PATH (its buffer, named in the JSON
+// by its file name: keep them in one directory). Float positions,
+// triangle indices (quads split) and COLOR_0 vertex colours: exposed,
+// clamped linear radiosity (glTF colours are linear; viewers apply sRGB),
+// under an unlit material (KHR_materials_unlit) so that viewers show the
+// radiosity as computed instead of lighting it again.
+bool WriteGltf(const ShadedMesh& mesh, float exposure, const std::string& gltf_path,
+               const std::string& bin_path, std::string* err);
+
 #endif

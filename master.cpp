@@ -355,7 +355,11 @@ class Scheduler {
     last_checkpoint_ = t_->Now();
   }
   void Emit(double unshot) {
-    if (sample_) sample_({Elapsed(), solver_->shots(), wave_, mesh_.LeafCount(), unshot});
+    if (!sample_) return;
+    int alive = 0;
+    if (!t_->InProcess())
+      for (const Slot& s : slots_) alive += s.alive;
+    sample_({Elapsed(), solver_->shots(), wave_, mesh_.LeafCount(), unshot, alive});
   }
 
   const Mesh& mesh_;

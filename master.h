@@ -145,6 +145,7 @@ struct Sample {
   int wave;
   long elements;
   double unshot;
+  int workers = 0;  // alive; 0 when the master computes the columns itself
 };
 
 enum class RunStatus { kConverged, kLimit, kStopped, kNotConverged, kNoWorkers };

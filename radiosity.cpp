@@ -21,10 +21,12 @@
 
 #include "checkpoint.h"
 #include "connect.h"
+#include "errorchart.h"
 #include "hosts.h"
 #include "image.h"
 #include "master.h"
 #include "mesh.h"
+#include "progress.h"
 #include "results.h"
 #include "scene.h"
 #include "ssh.h"
@@ -49,6 +51,11 @@ enum ExitStatus {
 // (-j 1000000) from forking without end.
 constexpr long kMaxLocalWorkers = 256;
 
+// --converge's epsilon unless -e says otherwise: a hundred times below the
+// default, so that a run to the default is measured against an answer
+// about 1% of its own error away.
+constexpr double kConvergeEpsilon = 1e-5;
+
 const char kUsage[] =
     "usage: radiosity [options] SCENE.obj\n"
     "  -o, --out DIR          where results go (default: out)\n"
@@ -70,6 +77,8 @@ const char kUsage[] =
     "  -t, --time SEC         stop after SEC seconds\n"
     "      --no-overshoot     plain progressive refinement\n"
     "      --reference CSV    log RMS error against a converged result.csv\n"
+    "      --converge CSV     solve to epsilon 1e-5 (or -e) and also save result.csv\n"
+    "                         as CSV, a reference for --reference\n"
     "      --patch-size L     largest patch edge (default: scene diagonal / 16)\n"
     "      --elements N       elements per patch edge (default 2)\n"
     "      --no-subdivide     keep the mesh as built (default: divide where light changes)\n"
@@ -89,13 +98,13 @@ const char kUsage[] =
     "      --camera \"ex ey ez tx ty tz fov\"\n"
     "      --size WxH         picture size (default 512x512)\n"
     "      --format png|ppm   picture format (default png)\n"
-    "  -q, --quiet            no messages but errors and warnings\n"
+    "  -q, --quiet            no progress, no messages but errors and warnings\n"
     "  -v, --verbose          a line per progress sample\n"
     "      --version          print the version\n"
     "  -h, --help             this help\n"
     "       radiosity --worker   speak the worker protocol on stdin/stdout\n"
     "       radiosity --worker --connect HOST:PORT --secret FILE\n"
-    "                            the same with a master that --listens\n";
+    "                            the same with a master started with --listen\n";
 
 volatile std::sig_atomic_t g_stop = 0;
 
@@ -167,7 +176,7 @@ int main(int argc, char** argv) {
     kNoOvershoot = 256, kReference, kPatchSize, kElements, kNoRotate, kSeed,
     kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
     kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
-    kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect,
+    kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect, kConverge,
     kCheckpoint, kCheckpointEvery, kResume,
   };
   static const option kLong[] = {
@@ -189,6 +198,7 @@ int main(int argc, char** argv) {
       {"time", required_argument, nullptr, 't'},
       {"no-overshoot", no_argument, nullptr, kNoOvershoot},
       {"reference", required_argument, nullptr, kReference},
+      {"converge", required_argument, nullptr, kConverge},
       {"patch-size", required_argument, nullptr, kPatchSize},
       {"elements", required_argument, nullptr, kElements},
       {"no-subdivide", no_argument, nullptr, kNoSubdivide},
@@ -212,7 +222,8 @@ int main(int argc, char** argv) {
       {"help", no_argument, nullptr, 'h'},
       {nullptr, 0, nullptr, 0},
   };
-  std::string out_dir = "out", reference, camera_text, format = "png";
+  std::string out_dir = "out", reference, converge, camera_text, format = "png";
+  bool epsilon_given = false;
   RunOptions run;
   MeshOptions mesh_opts;
   SubdivideOptions sub_opts;
@@ -249,11 +260,15 @@ int main(int argc, char** argv) {
         if (run.resolution % 2) BadOption("--resolution", optarg, "must be even");
         break;
       }
-      case 'e': run.epsilon = Number("--epsilon", optarg, 1e-15, 1); break;
+      case 'e':
+        run.epsilon = Number("--epsilon", optarg, 1e-15, 1);
+        epsilon_given = true;
+        break;
       case 's': run.max_shots = Integer("--shots", optarg, 1, 1L << 50); break;
       case 't': run.max_seconds = Number("--time", optarg, 1e-3, 1e9); break;
       case kNoOvershoot: run.overshoot = false; break;
       case kReference: reference = optarg; break;
+      case kConverge: converge = optarg; break;
       case kPatchSize: mesh_opts.patch_size = Number("--patch-size", optarg, 1e-300, 1e300); break;
       case kElements: mesh_opts.elements_per_patch = int(Integer("--elements", optarg, 1, 64)); break;
       case kNoSubdivide: subdivide = false; break;
@@ -351,6 +366,7 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
   const std::string scene_path = argv[optind];
+  if (!converge.empty() && !epsilon_given) run.epsilon = kConvergeEpsilon;
 
   std::vector<std::string> warnings;
   Scene scene;
@@ -399,10 +415,16 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, OnSignal);
   run.stop = &g_stop;
   Solver solver(mesh, run.overshoot);
+  // Progress: a line redrawn in place on a terminal, else a line every 2 s
+  // (a log file or a batch system's output should not fill with \r).
+  const bool terminal = isatty(2);
+  Progress progress([](const std::string& text) { std::fputs(text.c_str(), stderr); }, terminal,
+                    run.epsilon, terminal ? 0.25 : 2.0);
   auto sample = [&](const Sample& s) {
     double rms = 0, rel = 0;
     if (!ref.empty()) RmsError(scene, FaceRadiosity(mesh, solver.radiosity()), ref, &rms, &rel);
     log.Row(s, ref.empty() ? nullptr : &rms, ref.empty() ? nullptr : &rel);
+    if (verbosity == 1) progress.Update(s, ref.empty() ? nullptr : &rms, ref.empty() ? nullptr : &rel);
     if (verbosity >= 2) {
       std::fprintf(stderr, "radiosity: %8.2f s %7ld shots  unshot %.3e", s.seconds, s.shots, s.unshot);
       if (!ref.empty()) std::fprintf(stderr, "  rms %.3e (%.3f%%)", rms, 100 * rel);
@@ -438,8 +460,11 @@ int main(int argc, char** argv) {
   std::unique_ptr<Subdivider> subdivider;
   if (subdivide) subdivider = std::make_unique<Subdivider>(&mesh, sub_opts);
   const long built = mesh.LeafCount();
+  // Workers joining, lost or skipped: above the progress line; -q keeps
+  // only the warnings.
   auto note = [&](const std::string& line, bool warning) {
-    if (warning || verbosity >= 2) std::fprintf(stderr, "radiosity: %s\n", line.c_str());
+    if (verbosity == 1) progress.Note(line);
+    else if (warning || verbosity >= 2) std::fprintf(stderr, "radiosity: %s\n", line.c_str());
   };
   std::unique_ptr<Transport> transport;
   if (workers == 0 && !remote) {
@@ -501,7 +526,7 @@ int main(int argc, char** argv) {
     run.checkpoint = [&](const RunState& state) {
       const auto t0 = std::chrono::steady_clock::now();
       size_t bytes = 0;
-      const Checkpoint c = Capture(identity, mesh, solver, subdivider.get(), state, log.rows());
+      const Checkpoint c = Capture(identity, mesh, solver, subdivider.get(), state, log.text());
       if (!WriteCheckpoint(checkpoint_file, c, &bytes, &err))
         std::fprintf(stderr, "radiosity: warning: checkpoint not written: %s\n", err.c_str());
       else if (verbosity >= 2)
@@ -513,6 +538,7 @@ int main(int argc, char** argv) {
   RunResult result =
       RunMaster(&mesh, run, &solver, subdivider.get(), transport.get(), sample, note);
   transport->Shutdown();
+  progress.Finish();
   if (verbosity >= 2)
     std::fprintf(stderr,
                  "radiosity: master: %.3f s distributing, %.3f s receiving, %.3f s shooting, "
@@ -525,6 +551,11 @@ int main(int argc, char** argv) {
                  double(result.bytes_sent) / std::max(1L, result.shots),
                  double(result.bytes_received) / std::max(1L, result.shots));
   if (!log.Close(&err)) Die(kExitFailure, err);
+  // Drawn even when the run failed: how it went is what one wants to see.
+  const std::string scene_name = scene_path.substr(scene_path.rfind('/') + 1);
+  if (!WriteErrorChart(out_dir + "/error.svg", scene_name + ": error against run time",
+                       log.rows(), &err))
+    Die(kExitFailure, err);
   if (result.status == RunStatus::kNoWorkers)
     Die(kExitFailure, result.why + "; no results written");
   if (result.status == RunStatus::kNotConverged)
@@ -536,8 +567,22 @@ int main(int argc, char** argv) {
   const auto shaded = picture({frame_name(result.waves), out_dir + "/final." + format});
   if (verbosity >= 2)
     std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", result.waves, mesh.LeafCount());
-  if (!WritePly(shaded.first, shaded.second, out_dir + "/result.ply", &err))
+  if (!WritePly(shaded.first, shaded.second, out_dir + "/result.ply", &err) ||
+      !WriteGltf(shaded.first, shaded.second, out_dir + "/result.gltf", out_dir + "/result.bin",
+                 &err))
     Die(kExitFailure, err);
+  if (!converge.empty()) {
+    // A reference must be converged: one cut short by -s, -t or a signal
+    // would pass its own error on to every run measured against it.
+    if (result.status != RunStatus::kConverged)
+      Die(kExitFailure, "--converge " + converge + ": not written, the run did not converge (" +
+                            (result.why.empty() ? std::string("stopped on request") : result.why) +
+                            ")");
+    if (!WriteResultCsv(converge, scene, face_b, &err)) Die(kExitFailure, err);
+    if (verbosity >= 1)
+      std::fprintf(stderr, "radiosity: reference (epsilon %g) in %s: use --reference %s\n",
+                   run.epsilon, converge.c_str(), converge.c_str());
+  }
 
   if (subdivider && subdivider->capped())
     std::fprintf(stderr, "radiosity: warning: subdivision stopped at %ld elements: the next "

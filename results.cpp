@@ -4,7 +4,9 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <cstdlib>
 #include <fstream>
+#include <sstream>
 #include <unordered_map>
 
 #include "check.h"
@@ -168,12 +170,31 @@ void LogCsv::Row(const Sample& s, const double* rms, const double* rel_rms) {
   if (rms) std::snprintf(buf + n, sizeof buf - size_t(n), "%.6g,%.6g\n", *rms, *rel_rms);
   else std::snprintf(buf + n, sizeof buf - size_t(n), ",\n");
   std::fputs(buf, f_);
-  rows_ += buf;
+  text_ += buf;
+  rows_.push_back({s.seconds, s.shots, s.wave, s.elements, s.unshot, rms ? *rms : NAN,
+                   rel_rms ? *rel_rms : NAN});
 }
 
-void LogCsv::Restore(const std::string& rows) {
-  std::fputs(rows.c_str(), f_);
-  rows_ = rows;
+void LogCsv::Restore(const std::string& text) {
+  std::fputs(text.c_str(), f_);
+  text_ = text;
+  rows_.clear();
+  // Rows this program wrote (the checkpoint's checksum vouches for them).
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    LogRow r{0, 0, 0, 0, 0, NAN, NAN};
+    std::istringstream f(line);
+    std::string cell[7];
+    for (std::string& c : cell) std::getline(f, c, ',');
+    r.seconds = std::atof(cell[0].c_str());
+    r.shots = std::atol(cell[1].c_str());
+    r.wave = std::atoi(cell[2].c_str());
+    r.elements = std::atol(cell[3].c_str());
+    r.unshot = std::atof(cell[4].c_str());
+    if (!cell[5].empty()) r.rms = std::atof(cell[5].c_str());
+    if (!cell[6].empty()) r.rel_rms = std::atof(cell[6].c_str());
+    rows_.push_back(r);
+  }
 }
 
 bool LogCsv::Close(std::string* err) {

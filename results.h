@@ -42,22 +42,35 @@ void RmsError(const Scene& scene, const std::vector<glm::dvec3>& face_b,
 void FieldError(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const Mesh& ref,
                 const std::vector<glm::dvec3>& ref_b, double* rms, double* rel_rms);
 
-// log.csv, a row per progress sample.
+// One row of log.csv; rms and rel_rms are NaN without a reference.
+struct LogRow {
+  double seconds;
+  long shots;
+  int wave;
+  long elements;
+  double unshot, rms, rel_rms;
+};
+
+// log.csv, a row per progress sample. The rows are kept too, for the
+// error chart drawn at the end (error.svg).
 class LogCsv {
  public:
   ~LogCsv();
   bool Open(const std::string& path, std::string* err);
   void Row(const Sample& s, const double* rms, const double* rel_rms);
   bool Close(std::string* err);
-  // The rows written so far, without the header (for a checkpoint); and
-  // rows of an earlier part of the run, written as they are (--resume).
-  const std::string& rows() const { return rows_; }
-  void Restore(const std::string& rows);
+  const std::vector<LogRow>& rows() const { return rows_; }
+  // The rows written so far as text, without the header (for a
+  // checkpoint); and those of an earlier part of the run, written as they
+  // are (--resume).
+  const std::string& text() const { return text_; }
+  void Restore(const std::string& text);
 
  private:
   std::FILE* f_ = nullptr;
   std::string path_;
-  std::string rows_;
+  std::vector<LogRow> rows_;
+  std::string text_;
 };
 
 // Leaf elements with radiosity averaged to their vertices (inside one face;

@@ -1,6 +1,6 @@
 // radiosity-parallel: the paper's section 5 reproduced, as tables on
 // stdout, CSV and SVG graphs in OUT_DIR.
-//   radiosity-parallel [--repeat N] [--quick] RADIOSITY OUT_DIR
+//   radiosity-parallel [--repeat N] [--quick] [--cores N] RADIOSITY OUT_DIR
 // RADIOSITY is the program whose --worker mode the real runs start (as
 // `radiosity -j N` does). Scenes come from scenes/ and converged answers
 // are cached in bench/results/tmp/, so run it from the repository's top
@@ -11,9 +11,10 @@
 //    worker process (the first 250 shots).
 //  * Graphs 3-5: speedup and efficiency by shots (time for 500 shots) and
 //    by RMS error (time to the RMS error one worker has after 500 shots),
-//    bytes on the wire per shot: real runs with 1 and 2 worker processes on
-//    this machine, the simulation of this machine next to them (the
-//    validation), and the simulated cluster on two networks.
+//    bytes on the wire per shot: real runs with 1, 2, 4 ... --cores worker
+//    processes on this machine (default 2 cores), the simulation of this
+//    machine next to them (the validation), and the simulated cluster on
+//    two networks.
 // Times run from the first shot, so that start-up (process start, the
 // scene's transfer, mesh building, the first round trip) is left out alike
 // everywhere: the figures are those of a run under way. The simulated
@@ -287,6 +288,14 @@ struct Config {
   std::string exe, out;
   int repeat = 3;
   bool quick = false;
+  int cores = 2;  // this machine's, shared by the master and the real workers
+  // Real worker counts: 1, 2, 4, ... below cores, then cores.
+  std::vector<int> RealCounts() const {
+    std::vector<int> n;
+    for (int k = 1; k < cores; k *= 2) n.push_back(k);
+    n.push_back(cores);
+    return n;
+  }
 };
 
 // ---------------------------------------------------------------------------
@@ -485,8 +494,8 @@ void SpeedupGraphs(const Config& c, const std::vector<Point>& pts, const Net& ne
                    const std::vector<int>& counts) {
   std::string err;
   Axis xa{"workers", {}, true};
-  for (int n : counts) xa.ticks.push_back(n);
-  if (net.real) xa.ticks = {1, 2};
+  for (int n : net.real ? c.RealCounts() : counts) xa.ticks.push_back(n);
+  if (xa.ticks.size() < 2) xa.ticks.push_back(2);  // one core: the axis still needs two ends
   std::vector<Series> sp, eff, rms;
   double hi = 1;
   for (const Point& p : pts)
@@ -568,7 +577,7 @@ std::vector<Point> Speedups(const Config& c, const std::vector<SceneData>& scene
         for (bool real : net.real ? std::vector<bool>{true, false} : std::vector<bool>{false}) {
           double target = 0;
           Point one{};
-          for (int n : net.real ? std::vector<int>{1, 2} : counts) {
+          for (int n : net.real ? c.RealCounts() : counts) {
             auto run = [&](long cap) {
               if (real) return RealRun(s, res, n, cap, c.exe);
               SimOptions o = net.model;
@@ -613,12 +622,12 @@ std::vector<Point> Speedups(const Config& c, const std::vector<SceneData>& scene
   for (const Net& net : nets) SpeedupGraphs(c, pts, net, counts);
 
   // Validation: the simulation of this machine against the real runs.
-  std::printf("Validation: the simulation of this machine (2 cores shared by the master and the "
+  std::printf("Validation: the simulation of this machine (%d cores shared by the master and the "
               "workers) against real runs\n"
               "| scene | R | workers | real s (%ld shots) | sim s | sim/real | real s (RMS) | "
               "sim s | sim/real | real master us/shot | sim master us/shot |\n"
               "|---|---|---|---|---|---|---|---|---|---|---|\n",
-              kShots);
+              c.cores, kShots);
   const std::string vpath = c.out + "/validation.csv";
   f = OpenCsv(vpath, "scene,R,workers,real_s,sim_s,ratio_shots,real_rms_s,sim_rms_s,ratio_rms,"
                      "real_master_us,sim_master_us");
@@ -647,8 +656,8 @@ std::vector<Point> Speedups(const Config& c, const std::vector<SceneData>& scene
   CloseCsv(f, vpath);
   char buf[200];
   std::snprintf(buf, sizeof buf,
-                "simulation within 15%% of the real runs, 1 and 2 workers (worst: %.1f%%)",
-                100 * worst);
+                "simulation within 15%% of the real runs, 1 to %d workers (worst: %.1f%%)",
+                c.cores, 100 * worst);
   targets->Add(worst <= 0.15, buf);
   std::printf("\n");
   return pts;
@@ -708,10 +717,12 @@ int main(int argc, char** argv) {
   for (; a < argc && argv[a][0] == '-'; ++a) {
     if (!std::strcmp(argv[a], "--quick")) c.quick = true;
     else if (!std::strcmp(argv[a], "--repeat") && a + 1 < argc) c.repeat = std::max(1, std::atoi(argv[++a]));
+    else if (!std::strcmp(argv[a], "--cores") && a + 1 < argc) c.cores = std::clamp(std::atoi(argv[++a]), 1, 256);
     else break;
   }
   if (argc - a != 2) {
-    std::fprintf(stderr, "usage: radiosity-parallel [--repeat N] [--quick] RADIOSITY OUT_DIR\n");
+    std::fprintf(stderr,
+                 "usage: radiosity-parallel [--repeat N] [--quick] [--cores N] RADIOSITY OUT_DIR\n");
     return 2;
   }
   c.exe = argv[a];
@@ -734,10 +745,11 @@ int main(int argc, char** argv) {
       targets.Add(r.worker / r.Master() > 100, buf);
     }
 
-  // This machine: 2 cores for the master and the workers, a socketpair
-  // between them (latency: a wake-up through poll; copying is the CPU's).
+  // This machine: --cores cores (default 2) for the master and the
+  // workers, a socketpair between them (latency: a wake-up through poll;
+  // copying is the CPU's).
   const std::vector<Net> nets = {
-      {"this machine", "local", Link(0, 20e-6, 2), true},
+      {"this machine", "local", Link(0, 20e-6, c.cores), true},
       {"1 Gbit/s", "1gbit", Link(1e9, 50e-6, 0), false},
       {"10 Mbit/s", "10mbit", Link(10e6, 200e-6, 0), false},
   };

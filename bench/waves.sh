@@ -10,15 +10,18 @@
 #  graph0-SCENE.svg - paper graph 0: unshot fraction and error against
 #          time over the waves of the adaptive run
 #  error-SCENE.svg  - error against time of the three runs
-# Rows go to bench/results/waves.csv (runs) and curves.csv (samples).
+# Rows go to bench/results/waves.csv (runs) and curves.csv (samples); set
+# RESULTS for another directory, WAVE_SCENES for other scenes (default:
+# room maze), REF_ELEMENTS for the reference's elements per patch edge.
 cd "$(dirname "$0")/.." || exit 1
-R=bench/results
+R=${RESULTS:-bench/results}
+SC=${WAVE_SCENES:-room maze}
 mkdir -p $R
 REF=${REF_ELEMENTS:-12}
 rows=$(mktemp)
 trap 'rm -f "$rows"' EXIT
 echo "scene,method,seconds,shots,wave,elements,unshot_fraction,rel_error" >$R/curves.csv
-for scene in room maze; do
+for scene in $SC; do
   ./build/radiosity-waves "scenes/$scene.obj" $R/curves.csv "$REF" >>"$rows" || exit 1
 done
 echo "Reference: uniform $REF x $REF elements per patch, epsilon 1e-4"
@@ -72,7 +75,7 @@ svg() {
         printf "<text x=\"%d\" y=\"%d\" fill=\"%s\">%s</text>\n", L + PW - 200, T + 16 * i, col[i], lab[i] }
       print "</svg>" }' $R/curves.csv >"$file"
 }
-for scene in room maze; do
+for scene in $SC; do
   svg $R/graph0-$scene.svg "Graph 0, $scene: adaptive with waves (dashed: a new wave)" "fraction" \
     "$scene:adaptive:unshot_fraction:#c00:unshot_fraction" "$scene:adaptive:rel_error:#00c:relative_RMS_error"
   svg $R/error-$scene.svg "$scene: relative RMS error per point against time" "relative error" \
@@ -80,4 +83,4 @@ for scene in room maze; do
     "$scene:adaptive:rel_error:#c00:adaptive_with_waves"
 done
 echo
-echo "CSV: $R/waves.csv $R/curves.csv; SVG: $R/graph0-room.svg $R/graph0-maze.svg $R/error-room.svg $R/error-maze.svg"
+echo "CSV: $R/waves.csv $R/curves.csv; SVG: $(for s in $SC; do printf '%s ' "$R/graph0-$s.svg" "$R/error-$s.svg"; done)"

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -422,6 +423,48 @@ TEST_F(ImageFiles, WritePly) {
 
   const std::string bad = dir_ + "/missing/m.ply";
   EXPECT_FALSE(WritePly(m, 1.0f, bad, &err));
+  EXPECT_EQ(err.rfind(bad + ": ", 0), 0u) << err;
+}
+
+TEST_F(ImageFiles, WriteGltf) {
+  ShadedMesh m;
+  AddPoly(&m, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}},
+          {glm::vec3(0.5f, 0, 2), glm::vec3(1), glm::vec3(1), glm::vec3(1)});
+  AddPoly(&m, {{0, 0, 1e-4}, {2.5, 0, 1e-4}, {0, 3, 1e-4}}, {glm::vec3(0.25f)});
+  const std::string gltf = dir_ + "/m.gltf", bin = dir_ + "/m.bin";
+  std::string err;
+  ASSERT_TRUE(WriteGltf(m, 1.0f, gltf, bin, &err)) << err;
+
+  // 7 vertices: positions and colours, 7 x 12 bytes each; the quad as two
+  // triangles and the triangle: 9 indices of 4 bytes.
+  const std::string data = ReadAll(bin);
+  ASSERT_EQ(data.size(), 7u * 12 + 7u * 12 + 9u * 4);
+  std::vector<float> pos(21), col(21);
+  std::vector<uint32_t> idx(9);
+  std::memcpy(pos.data(), data.data(), 84);
+  std::memcpy(col.data(), data.data() + 84, 84);
+  std::memcpy(idx.data(), data.data() + 168, 36);
+  EXPECT_EQ(glm::vec3(pos[15], pos[16], pos[17]), glm::vec3(2.5f, 0, 1e-4f));
+  // Linear, exposed and clamped to [0, 1]: glTF colours are linear.
+  EXPECT_EQ(glm::vec3(col[0], col[1], col[2]), glm::vec3(0.5f, 0, 1));
+  EXPECT_EQ(col[12], 0.25f);
+  EXPECT_EQ(idx, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 4, 5, 6}));
+
+  const std::string json = ReadAll(gltf);
+  EXPECT_NE(json.find("\"uri\": \"m.bin\", \"byteLength\": 204"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"count\": 7, \"type\": \"VEC3\", \"min\": [0, 0, 0], \"max\": [2.5, 3, "
+                      "9.99999975e-05]"),
+            std::string::npos)
+      << json;
+  EXPECT_NE(json.find("\"componentType\": 5125, \"count\": 9, \"type\": \"SCALAR\""),
+            std::string::npos)
+      << json;
+  EXPECT_NE(json.find("\"byteOffset\": 168, \"byteLength\": 36, \"target\": 34963"),
+            std::string::npos)
+      << json;
+
+  const std::string bad = dir_ + "/missing/m.bin";
+  EXPECT_FALSE(WriteGltf(m, 1.0f, dir_ + "/missing/m.gltf", bad, &err));
   EXPECT_EQ(err.rfind(bad + ": ", 0), 0u) << err;
 }
 

@@ -15,10 +15,12 @@
 # shellcheck source=tests/lib.sh disable=SC2046,SC2086
 . "$(dirname "$0")/lib.sh"
 
-# 1. Furnace: uniform, nothing to divide.
+# 1. Furnace: uniform, nothing to divide. With -j 0: the shooting order of
+# parallel runs varies with timing, and on a loaded machine one order in
+# dozens left a passing gradient at a division pass (2445 elements once).
 write_mtl "$T/f.mtl" m "0.9 0.9 0.9" "1 1 1"
 write_box "$T/f.obj" f.mtl 1 1 1 m m m m m m
-if run_ok "furnace" "$T/f" -r 64 -e 1e-4 "$T/f.obj"; then
+if run_ok "furnace" "$T/f" -j 0 -r 64 -e 1e-4 "$T/f.obj"; then
   check_rel "furnace Kd=0.9 with subdivision: face 0 B_r = 1/(1-Kd)" "$(csv_get "$T/f/result.csv" 0 B_r)" 10 0.5
   counts=$(awk -F, 'NR > 1 { print $4 }' "$T/f/log.csv" | sort -u | tr '\n' ' ')
   waves=$(awk -F, 'NR > 1 { print $3 }' "$T/f/log.csv" | sort -u | tr '\n' ' ')

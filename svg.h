@@ -1,8 +1,8 @@
-// Charts as SVG files, for the benchmark's graphs: lines (with points) on
-// linear or log axes, and stacked bars. No dependency beyond the C++
-// library, so `make bench` needs no plotting package.
-#ifndef RADIOSITY_BENCH_SVG_H
-#define RADIOSITY_BENCH_SVG_H
+// Charts as SVG files, for the benchmark's graphs and a run's error.svg:
+// lines (with points) on linear or log axes, and stacked bars. No
+// dependency beyond the C++ library, so no plotting package is needed.
+#ifndef RADIOSITY_SVG_H
+#define RADIOSITY_SVG_H
 
 #include <string>
 #include <vector>
@@ -18,11 +18,14 @@ struct Series {
   std::vector<double> x, y;  // NaN y: no point there
   bool dashed = false;
   bool line = true;  // false: points only
+  bool dots = true;  // a point at every value (false: many values, line only)
 };
 
-// Colours go round a fixed palette in series order.
+// Colours go round a fixed palette in series order. x_marks: dashed
+// vertical lines at those x (events: a new wave).
 bool WriteLineChart(const std::string& path, const std::string& title, const Axis& x,
-                    const Axis& y, const std::vector<Series>& series, std::string* err);
+                    const Axis& y, const std::vector<Series>& series, std::string* err,
+                    const std::vector<double>& x_marks = {});
 
 // groups[g] has a bar of parts stacked bottom up: values[g][p].
 bool WriteStackedBars(const std::string& path, const std::string& title, const Axis& y,

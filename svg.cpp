@@ -106,10 +106,18 @@ bool Save(const std::string& path, const std::string& svg, std::string* err) {
 }  // namespace
 
 bool WriteLineChart(const std::string& path, const std::string& title, const Axis& x,
-                    const Axis& y, const std::vector<Series>& series, std::string* err) {
+                    const Axis& y, const std::vector<Series>& series, std::string* err,
+                    const std::vector<double>& x_marks) {
   const Scale sx{x, kLeft, kWidth - kRight}, sy{y, kHeight - kBottom, kTop};
   std::string s = Frame(title, &sx, sy);
   char buf[256];
+  for (double m : x_marks) {
+    std::snprintf(buf, sizeof buf,
+                  "<line x1=\"%.1f\" y1=\"%g\" x2=\"%.1f\" y2=\"%g\" stroke=\"#999\" "
+                  "stroke-dasharray=\"3 3\"/>\n",
+                  sx(m), kHeight - kBottom, sx(m), kTop);
+    s += buf;
+  }
   for (size_t i = 0; i < series.size(); ++i) {
     const Series& se = series[i];
     const char* color = kPalette[i % kColors];
@@ -119,6 +127,7 @@ bool WriteLineChart(const std::string& path, const std::string& title, const Axi
       if (!std::isfinite(se.y[k])) continue;
       std::snprintf(buf, sizeof buf, "%.1f,%.1f ", sx(se.x[k]), sy(se.y[k]));
       pts += buf;
+      if (!se.dots) continue;
       std::snprintf(buf, sizeof buf,
                     "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"3\" fill=\"%s\" clip-path=\"url(#plot)\"/>\n",
                     sx(se.x[k]), sy(se.y[k]), color);
@@ -127,7 +136,8 @@ bool WriteLineChart(const std::string& path, const std::string& title, const Axi
     if (se.line)
       s += "<polyline fill=\"none\" stroke=\"" + std::string(color) + "\" stroke-width=\"1.5\"" +
            dash + " clip-path=\"url(#plot)\" points=\"" + pts + "\"/>\n";
-    std::string mark = "<circle cx=\"12\" cy=\"0\" r=\"3\" fill=\"" + std::string(color) + "\"/>";
+    std::string mark =
+        se.dots ? "<circle cx=\"12\" cy=\"0\" r=\"3\" fill=\"" + std::string(color) + "\"/>" : "";
     if (se.line)
       mark += "<line x1=\"0\" y1=\"0\" x2=\"24\" y2=\"0\" stroke=\"" + std::string(color) +
               "\" stroke-width=\"1.5\"" + dash + "/>";
