@@ -8,7 +8,7 @@
 
 SimTransport::SimTransport(const Mesh& mesh, const SimOptions& opts)
     : mesh_(mesh), opts_(opts), hemicube_(opts.resolution), workers_(opts.workers),
-      mark_(WallNow()) {
+      mark_(ThreadCpuSeconds()), wall_mark_(WallNow()) {
   CHECK(opts_.workers >= 1 && opts_.host_cores >= 0 && opts_.latency_s >= 0);
   std::string frame;
   proto::EncodeHello(proto::Hello(), &frame);
@@ -45,7 +45,7 @@ int SimTransport::Starting() const {
 
 double SimTransport::Now() {
   if (opts_.master_cost_s >= 0) return now_;
-  return now_ + WallNow() - mark_;
+  return now_ + WallNow() - wall_mark_;
 }
 
 void SimTransport::Schedule(double t, Event ev) {
@@ -219,12 +219,13 @@ void SimTransport::Advance(double* master_cpu, double until, bool stop_on_arriva
 
 void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
   // The master has worked since the last Poll: the world moves on meanwhile.
-  double cpu = opts_.master_cost_s >= 0 ? opts_.master_cost_s : WallNow() - mark_;
+  double cpu = opts_.master_cost_s >= 0 ? opts_.master_cost_s : ThreadCpuSeconds() - mark_;
   master_s_ += cpu;
   Advance(&cpu, 0, false);
   if (inbox_.empty()) Advance(nullptr, now_ + timeout, true);
   // From here on it is the master's work again: decoding what arrived.
-  mark_ = WallNow();
+  mark_ = ThreadCpuSeconds();
+  wall_mark_ = WallNow();
   for (Event& ev : inbox_) {
     Worker& wk = workers_[ev.worker];
     switch (ev.kind) {

@@ -13,9 +13,11 @@
 //    does between the return of one Poll() and the start of the next, plus
 //    the decoding of the columns Poll() hands it. Now() includes what is
 //    used so far, so the master's notion of time runs on while it works.
-//    That time is the monotonic clock's, as the real master's parts are
-//    timed (a thread CPU clock is a system call dearer than the work it
-//    would time): run the simulation on a machine that is otherwise idle.
+//    The charge is the thread's CPU time, read twice per Poll(), so that a
+//    moment the master's thread was preempted is not charged; Now() in
+//    between runs on the monotonic clock, which costs no system call
+//    (the CPU clock's costs 1.5 us here, and the master asks the time
+//    several times per shot).
 //  * The master's link is one shared medium that all frames, both ways,
 //    cross one after another (FIFO by the time they are sent): a frame of
 //    B bytes holds it 8B / bandwidth seconds, then arrives `latency` later.
@@ -156,7 +158,8 @@ class SimTransport : public Transport {
   std::deque<Event> inbox_;  // reached the master, not yet polled
   double now_ = 0;
   double medium_free_ = 0;  // when the link is next idle
-  double mark_;             // the monotonic clock at the last charge
+  double mark_;             // the thread's CPU time at the last charge
+  double wall_mark_;        // the monotonic clock then
   proto::FrameReader reader_;
   size_t ready_bytes_;       // a worker's hello and ready frames
   uint64_t sent_ = 0, received_ = 0;
