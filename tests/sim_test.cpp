@@ -191,6 +191,24 @@ TEST(Sim, TheMasterIsChargedItsWork) {
   EXPECT_NEAR(t.MasterSeconds(), r.seconds, 2 * kCost);
 }
 
+// A master slower than its workers stops feeding them: the columns it has
+// not shot count against their queues, so they do not pile up (which
+// would shoot patches in arrival order, not by power).
+TEST(Sim, WorkersAheadOfTheMasterWait) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(32);
+  o.master_cost_s = 0.2 * kCost;  // at most 5 workers' worth of shots
+  SimTransport t(m, o);
+  RunOptions ro = Shots(200);
+  ro.queue = 4;
+  RunResult r = Simulate(m, ro, &t);
+  long columns = 0;
+  for (int w = 0; w < o.workers; ++w) columns += t.Columns(w);
+  EXPECT_EQ(r.shots, 200);
+  EXPECT_LE(columns, r.shots + o.workers * ro.queue);
+  EXPECT_NEAR(r.seconds, 200 * o.master_cost_s, 0.1 * 200 * o.master_cost_s);
+}
+
 TEST(Sim, ASlowerWorkerGetsFewerColumns) {
   Mesh m = BoxMesh();
   SimOptions o = Fixed(2);
