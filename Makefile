@@ -70,7 +70,7 @@ asan:
 demo: deps
 	@$(MAKE) --no-print-directory radiosity
 	./radiosity -o out/cornell scenes/cornell.obj
-	@echo "pictures and results: $(CURDIR)/out/cornell (final.png, result.csv, log.csv, result.ply)"
+	@echo "pictures and results: $(CURDIR)/out/cornell (final.png, frame-NN.png per wave, error.svg, result.csv, log.csv, result.ply, result.gltf)"
 
 bench: deps
 	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
