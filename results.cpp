@@ -171,16 +171,17 @@ void LogCsv::Row(const Sample& s, const double* rms, const double* rel_rms) {
   else std::snprintf(buf + n, sizeof buf - size_t(n), ",\n");
   std::fputs(buf, f_);
   text_ += buf;
-  rows_.push_back({s.seconds, s.shots, s.wave, s.elements, s.unshot, rms ? *rms : NAN,
-                   rel_rms ? *rel_rms : NAN});
 }
 
 void LogCsv::Restore(const std::string& text) {
   std::fputs(text.c_str(), f_);
   text_ = text;
-  rows_.clear();
-  // Rows this program wrote (the checkpoint's checksum vouches for them).
-  std::istringstream in(text);
+}
+
+std::vector<LogRow> LogCsv::rows() const {
+  // Rows this program wrote (or a checkpoint's checksum vouches for).
+  std::vector<LogRow> rows;
+  std::istringstream in(text_);
   for (std::string line; std::getline(in, line);) {
     LogRow r{0, 0, 0, 0, 0, NAN, NAN};
     std::istringstream f(line);
@@ -193,8 +194,9 @@ void LogCsv::Restore(const std::string& text) {
     r.unshot = std::atof(cell[4].c_str());
     if (!cell[5].empty()) r.rms = std::atof(cell[5].c_str());
     if (!cell[6].empty()) r.rel_rms = std::atof(cell[6].c_str());
-    rows_.push_back(r);
+    rows.push_back(r);
   }
+  return rows;
 }
 
 bool LogCsv::Close(std::string* err) {

@@ -51,25 +51,25 @@ struct LogRow {
   double unshot, rms, rel_rms;
 };
 
-// log.csv, a row per progress sample. The rows are kept too, for the
-// error chart drawn at the end (error.svg).
+// log.csv, a row per progress sample. The rows are kept as written, for
+// a checkpoint and for the error chart drawn at the end (error.svg).
 class LogCsv {
  public:
   ~LogCsv();
   bool Open(const std::string& path, std::string* err);
   void Row(const Sample& s, const double* rms, const double* rel_rms);
   bool Close(std::string* err);
-  const std::vector<LogRow>& rows() const { return rows_; }
   // The rows written so far as text, without the header (for a
   // checkpoint); and those of an earlier part of the run, written as they
   // are (--resume).
   const std::string& text() const { return text_; }
   void Restore(const std::string& text);
+  // The rows written so far, read back from text().
+  std::vector<LogRow> rows() const;
 
  private:
   std::FILE* f_ = nullptr;
   std::string path_;
-  std::vector<LogRow> rows_;
   std::string text_;
 };
 
