@@ -382,8 +382,11 @@ class Scheduler {
   const std::function<void(const std::string&, bool)>& note_;
   std::vector<char> taken_;           // owned by a worker, or its column waits
   std::vector<Slot> slots_;
-  std::deque<proto::Column> ready_;   // columns received, to be shot in order
-  std::deque<int> ready_from_;        // the slot each came from (-1: none now)
+  struct Ready {
+    proto::Column column;
+    int from;  // the slot it came from (-1: that slot is gone)
+  };
+  std::deque<Ready> ready_;  // columns received, to be shot in order
   double base_ = 0, before_ = 0;      // clock: Elapsed() survives a fallback
   double best_ = HUGE_VAL;            // stall detection, per wave
   long best_at_ = 0;
@@ -416,7 +419,7 @@ RunState Scheduler::State() {
   s.columns = r_.columns;
   // Columns waiting are shot first; then the workers' patches, sent before
   // prepared, taken in turns as their columns would come back.
-  for (const proto::Column& c : ready_) s.pending.push_back(c.patch);
+  for (const Ready& r : ready_) s.pending.push_back(r.column.patch);
   for (size_t i = 0;; ++i) {
     bool any = false;
     for (const Slot& w : slots_) {
@@ -499,8 +502,7 @@ void Scheduler::Handle(WorkerEvent& ev) {
       ++s.waiting;
       s.sent.erase(it);
       r_.worker_s += c.compute_s;
-      ready_.push_back(std::move(ev.column));
-      ready_from_.push_back(ev.worker);
+      ready_.push_back({std::move(ev.column), ev.worker});
       return;
     }
   }
@@ -511,6 +513,7 @@ void Scheduler::Handle(WorkerEvent& ev) {
 // the patch with the most power to shoot, so that the first lights of a
 // run go to different workers. Then send what each pipeline has room for.
 void Scheduler::Distribute() {
+  const double t0 = WallNow();
   bool low = false;
   for (const Slot& s : slots_) low |= s.alive && s.Queued() < size_t(s.low);
   for (bool more = low; more;) {
@@ -534,6 +537,7 @@ void Scheduler::Distribute() {
       t_->Assign(int(w), a);
     }
   }
+  r_.distribute_s += WallNow() - t0;
 }
 
 bool Scheduler::Stop(double unshot) {
@@ -660,13 +664,11 @@ RunResult Scheduler::Run() {
       t_ = fallback_.get();
       base_ = last_checkpoint_ = t_->Now();
       slots_.clear();
-      std::fill(ready_from_.begin(), ready_from_.end(), -1);
+      for (Ready& r : ready_) r.from = -1;
       continue;
     }
     // Sending work comes before shooting, so that workers never starve.
-    t0 = WallNow();
     Distribute();
-    r_.distribute_s += since(t0);
     if (ready_.empty()) {
       bool owned = false;
       for (const Slot& s : slots_) owned |= s.Owned() > 0;
@@ -677,11 +679,10 @@ RunResult Scheduler::Run() {
       continue;
     }
     t0 = WallNow();
-    proto::Column c = std::move(ready_.front());
+    const proto::Column c = std::move(ready_.front().column);
+    Slot* from = ready_.front().from >= 0 ? &slots_[size_t(ready_.front().from)] : nullptr;
     ready_.pop_front();
-    const int from = ready_from_.front();
-    ready_from_.pop_front();
-    if (from >= 0) --slots_[size_t(from)].waiting;
+    if (from) --from->waiting;
     solver_->Shoot(c.patch, c.ff);
     taken_[c.patch] = 0;
     ++r_.columns;
@@ -689,12 +690,7 @@ RunResult Scheduler::Run() {
     r_.shoot_s += since(t0);
     // The shot made room in its worker's queue: refill it before Poll
     // blocks, as the arrival of the column no longer did.
-    if (from >= 0 && slots_[size_t(from)].alive &&
-        slots_[size_t(from)].Queued() < size_t(slots_[size_t(from)].low)) {
-      t0 = WallNow();
-      Distribute();
-      r_.distribute_s += since(t0);
-    }
+    if (from && from->alive && from->Queued() < size_t(from->low)) Distribute();
     if (solver_->shots() % log_every == 0) Emit(unshot);
     Subdivide();
     unshot = solver_->UnshotFraction();
