@@ -65,6 +65,50 @@ run_rad() {
   return 0
 }
 
+# bg_run NAME ARGS...: the program in the background into $T/NAME, its
+# stdout and stderr in $T/NAME.out and $T/NAME.err; PID set.
+bg_run() {
+  local name=$1; shift
+  mkdir -p "$T/$name"
+  "$RADIOSITY" -o "$T/$name" "$@" >"$T/$name.out" 2>"$T/$name.err" &
+  PID=$!
+}
+
+# workers_of PID: the master's local worker processes (its children).
+workers_of() { pgrep -P "$1"; }
+
+# wait_workers PID N: until the master has N children (at most 5 s).
+wait_workers() {
+  local i
+  for i in $(seq 50); do
+    [ "$(workers_of "$1" | wc -l)" -ge "$2" ] && return 0
+    sleep 0.1
+  done
+  return 1
+}
+
+# no_workers_left WHAT: a check that no worker process of $RADIOSITY is
+# left running.
+no_workers_left() {
+  local left
+  left=$(pgrep -f -- "$RADIOSITY --worker" | wc -l)
+  if [ "$left" -eq 0 ]; then pass "$1"; else fail "$1 ($left worker processes left behind)"; fi
+}
+
+# says NAME TEXT: stderr of run NAME has TEXT (a grep pattern).
+says() { grep -q -- "$2" "$T/$1.err"; }
+
+# wait_says NAME TEXT: until says NAME TEXT, while $PID runs (at most 60 s).
+wait_says() {
+  local i
+  for i in $(seq 600); do
+    says "$1" "$2" && return 0
+    kill -0 "$PID" 2>/dev/null || return 1
+    sleep 0.1
+  done
+  return 1
+}
+
 # run_ok WHAT OUTDIR [ARGS...]: run_rad, and a check that it exited 0 and
 # wrote result.csv. Returns 1 (after the FAIL line) when it did not.
 run_ok() {

@@ -61,27 +61,6 @@ write_box "$T/f.obj" f.mtl 1 1 1 m m m m m m
 run_ok "furnace rho 0.9, -j 2" "$T/f" -j 2 -e 1e-4 -r 64 "$T/f.obj" &&
   check_rel "furnace rho 0.9, -j 2: B" "$(csv_wmean "$T/f/result.csv" B_g 0 1 2 3 4 5)" 10 0.5
 
-# bg_run NAME ARGS...: the master in the background; PID set.
-bg_run() {
-  local name=$1; shift
-  mkdir -p "$T/$name"
-  "$RADIOSITY" -o "$T/$name" "$@" >"$T/$name.out" 2>"$T/$name.err" &
-  PID=$!
-}
-
-# workers_of PID: the master's worker processes (its children).
-workers_of() { pgrep -P "$1"; }
-
-# wait_workers PID N: until the master has N children (at most 5 s).
-wait_workers() {
-  local i
-  for i in $(seq 50); do
-    [ "$(workers_of "$1" | wc -l)" -ge "$2" ] && return 0
-    sleep 0.1
-  done
-  return 1
-}
-
 LONG=("${ARGS[@]}" "$MAZE")
 
 bg_run kill1 -j 2 "${LONG[@]}"
@@ -174,8 +153,6 @@ else
 fi
 
 # No process may be left behind by any of the runs above.
-left=$(pgrep -f -- "$RADIOSITY --worker" | wc -l)
-[ "$left" -eq 0 ] && pass "no worker process left behind" ||
-  fail "worker processes left behind: $left"
+no_workers_left "no worker process left behind"
 
 finish

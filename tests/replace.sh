@@ -25,30 +25,19 @@ run_ok "sequential reference" "$T/ref" -j 0 "${ARGS[@]}" "$SCENE" || { finish; e
 
 head -c 32 /dev/urandom | base64 >"$T/secret"
 chmod 600 "$T/secret"
-mkdir -p "$T/par"
-"$RADIOSITY" -v -j 1 --listen 127.0.0.1:0 --secret "$T/secret" -o "$T/par" "${ARGS[@]}" "$SCENE" \
-  >"$T/par.out" 2>"$T/par.err" &
-M=$!
-# until EXPR DESCRIPTION: waits up to 60 s for a line in the master's stderr.
-until_says() {
-  for _ in $(seq 600); do
-    grep -q "$1" "$T/par.err" && return 0
-    kill -0 "$M" 2>/dev/null || return 1
-    sleep 0.1
-  done
-  return 1
-}
-if ! until_says "wave 1 ends"; then
+bg_run par -v -j 1 --listen 127.0.0.1:0 --secret "$T/secret" "${ARGS[@]}" "$SCENE"
+M=$PID
+if ! wait_says par "wave 1 ends"; then
   fail "the master did not end wave 1 (exit status $(wait "$M"; echo $?))"; show 10
   finish; exit
 fi
 kill -STOP "$M"
-A=$(pgrep -P "$M" -f -- "--worker" | head -1)
+A=$(workers_of "$M" | head -1)
 port=$(sed -n 's/^radiosity: listening for workers on 127.0.0.1:\([0-9]*\)$/\1/p' "$T/par.err")
 "$RADIOSITY" --worker --connect "127.0.0.1:$port" --secret "$T/secret" 2>"$T/b.err" &
 B=$!
 kill -CONT "$M"
-until_says "worker at 127.0.0.1:[0-9]*: joined" || fail "worker B did not join"
+wait_says par "worker at 127.0.0.1:[0-9]*: joined" || fail "worker B did not join"
 kill -9 "$A"
 wait "$M"; rc=$?
 wait "$B"; brc=$?
@@ -56,15 +45,14 @@ wait "$B"; brc=$?
 [ -n "$A" ] && [ "$rc" -eq 0 ] && [ "$brc" -eq 0 ] &&
   pass "worker A (pid $A) killed, B joined late: exit 0 (master), $brc (B)" ||
   fail "kill and replace: master exit $rc, worker B exit $brc, A pid '$A'"
-grep -q "lost (" "$T/par.err" && pass "the master says A was lost: $(grep -m1 'lost (' "$T/par.err")" ||
+says par "lost (" && pass "the master says A was lost: $(grep -m1 'lost (' "$T/par.err")" ||
   { fail "no line about the lost worker"; show; }
 # The edits B received live: waves ended after A was lost.
 later=$(awk '/lost \(/ { lost = 1 } lost && /wave [0-9]* ends/ { n++ } END { print n + 0 }' "$T/par.err")
 [ "$later" -ge 1 ] && pass "$later wave(s) ended after A was lost: B applied their edits" ||
   { fail "no wave ended after A was lost: the test did not reach its point"; show 20; }
-grep -q "no workers left" "$T/par.err" &&
+says par "no workers left" &&
   fail "the master fell back to computing alone: B was not working"
 check_same "killed and replaced: answer" "$T/par/result.csv" "$T/ref/result.csv" 0.5
-left=$(pgrep -f -- "$RADIOSITY --worker" | wc -l)
-[ "$left" -eq 0 ] && pass "no worker process left behind" || fail "worker processes left behind: $left"
+no_workers_left "no worker process left behind"
 finish

@@ -45,8 +45,6 @@ rad_run() {
   RC=$?
   echo "# radiosity -v -o $name $* -> exit $RC"
 }
-# says NAME TEXT: stderr of run NAME has TEXT (a grep pattern).
-says() { grep -q -- "$2" "$T/$1.err"; }
 show() { grep -v "^radiosity: *[0-9.]* s " "$T/$1.err" | head -"${2:-4}" | sed 's/^/#   /'; }
 
 run_ok "local reference" "$T/ref" -j 2 "${ARGS[@]}" "$CORNELL" || finish
@@ -190,16 +188,9 @@ out=$("$RADIOSITY" --listen 127.0.0.1:0 --secret "$T/open-secret" "$CORNELL" 2>&
 [ "$rc" -eq 2 ] && echo "$out" | grep -q "mode 0644); make it private with: chmod 600" &&
   pass "a secret others can read is refused, exit 2" || fail "open secret (exit $rc: $out)"
 
-mkdir -p "$T/listen"
-"$RADIOSITY" -v --listen 127.0.0.1:0 --secret "$T/secret" -o "$T/listen" "${ARGS[@]}" "$CORNELL" \
-  >"$T/listen.out" 2>"$T/listen.err" &
-PID=$!
-port=""
-for i in $(seq 50); do
-  port=$(sed -n 's/^radiosity: listening for workers on 127.0.0.1:\([0-9]*\)$/\1/p' "$T/listen.err")
-  [ -n "$port" ] && break
-  sleep 0.1
-done
+bg_run listen -v --listen 127.0.0.1:0 --secret "$T/secret" "${ARGS[@]}" "$CORNELL"
+wait_says listen "listening for workers on"
+port=$(sed -n 's/^radiosity: listening for workers on 127.0.0.1:\([0-9]*\)$/\1/p' "$T/listen.err")
 "$RADIOSITY" --worker --connect "127.0.0.1:$port" --secret "$T/wrong" 2>"$T/intruder.err"; wrc=$?
 "$RADIOSITY" --worker --connect "127.0.0.1:$port" --secret "$T/secret" 2>"$T/w1.err" &
 w1=$!
@@ -220,7 +211,5 @@ else
   fail "connect-back (exit $rc)"; show listen 6
 fi
 
-left=$(pgrep -f -- "$RADIOSITY --worker" | wc -l)
-[ "$left" -eq 0 ] && pass "no local worker process left behind" ||
-  fail "worker processes left behind: $left"
+no_workers_left "no local worker process left behind"
 finish
