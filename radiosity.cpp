@@ -22,6 +22,7 @@
 #include "checkpoint.h"
 #include "connect.h"
 #include "errorchart.h"
+#include "exit_status.h"
 #include "hosts.h"
 #include "image.h"
 #include "master.h"
@@ -39,13 +40,6 @@
 #endif
 
 namespace {
-
-// Exit status, mirrored in man/radiosity.1 (EXIT STATUS).
-enum ExitStatus {
-  kExitOk = 0,       // done, or stopped on request
-  kExitFailure = 1,  // run-time failure: did not converge, no worker, I/O error
-  kExitUsage = 2,    // bad usage or bad input
-};
 
 // Local workers beyond the cores only share them; the cap keeps a typo
 // (-j 1000000) from forking without end.

@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "exit_status.h"
 #include "master.h"
 
 namespace {
@@ -72,7 +73,7 @@ bool IsAgain() { return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINT
 short Conn::Events(bool writing) { return short(POLLIN | (writing ? POLLOUT : 0)); }
 
 std::string DescribeExit(int status) {
-  if (status == 127) return "could not be started (exit status 127)";
+  if (status == kExitExecFailed) return "could not be started (exit status 127)";
   return "exited with status " + std::to_string(status);
 }
 
@@ -120,9 +121,9 @@ std::unique_ptr<Conn> SpawnLocal(const std::vector<std::string>& argv, pid_t* pi
     std::signal(SIGINT, SIG_DFL);
     std::signal(SIGTERM, SIG_DFL);
     std::signal(SIGPIPE, SIG_DFL);
-    if (::dup2(sv[1], 0) < 0 || ::dup2(sv[1], 1) < 0) ::_exit(127);
+    if (::dup2(sv[1], 0) < 0 || ::dup2(sv[1], 1) < 0) ::_exit(kExitExecFailed);
     ::execv(args[0], args.data());
-    ::_exit(127);
+    ::_exit(kExitExecFailed);
   }
   ::close(sv[1]);
   ::fcntl(sv[0], F_SETFL, ::fcntl(sv[0], F_GETFL) | O_NONBLOCK);

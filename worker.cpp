@@ -12,6 +12,7 @@
 #include <poll.h>
 #include <unistd.h>
 
+#include "exit_status.h"
 #include "hemicube.h"
 #include "master.h"
 #include "mesh.h"
@@ -97,7 +98,7 @@ class Worker {
     std::string frame;
     proto::EncodeError(what, &frame);
     out_.Send(frame);
-    return 1;
+    return kExitFailure;
   }
   // Handles one frame after setup; returns false when the worker is done
   // (*status set).
@@ -172,11 +173,11 @@ bool Worker::Handle(proto::Msg type, const std::string& payload, int* status,
       return true;
     }
     case proto::Msg::kHeartbeat: return true;
-    case proto::Msg::kBye: *status = 0; return false;
+    case proto::Msg::kBye: *status = kExitOk; return false;
     case proto::Msg::kError: {
       std::string text;
       *err = proto::DecodeError(payload, &text, &why) ? "master says: " + text : why;
-      *status = 1;
+      *status = kExitFailure;
       return false;
     }
     default: why = std::string("unexpected ") + proto::MsgName(type) + " frame"; break;
@@ -188,12 +189,12 @@ bool Worker::Handle(proto::Msg type, const std::string& payload, int* status,
 int Worker::Run(std::string* err) {
   std::string frame;
   proto::EncodeHello(proto::Hello(), &frame);
-  if (!out_.Send(frame)) { *err = "cannot write to the master"; return 1; }
+  if (!out_.Send(frame)) { *err = "cannot write to the master"; return kExitFailure; }
   proto::Msg type;
   std::string payload, why;
   // Setup: the master's hello, then the scene.
   Got got = Read(kMasterTimeout, &type, &payload, &why);
-  if (got == kEnd) return 0;
+  if (got == kEnd) return kExitOk;
   if (got != kFrame) return Fail(got == kTimeout ? "no hello from the master" : why, err);
   proto::Hello hello;
   if (type != proto::Msg::kHello || !proto::DecodeHello(payload, &hello, &why))
@@ -202,7 +203,7 @@ int Worker::Run(std::string* err) {
       hello.build != proto::BuildId())
     return Fail("this worker is '" + proto::BuildId() + "', the master '" + hello.build + "'", err);
   got = Read(kMasterTimeout, &type, &payload, &why);
-  if (got == kEnd) return 0;
+  if (got == kEnd) return kExitOk;
   if (got != kFrame) return Fail(got == kTimeout ? "no scene from the master" : why, err);
   proto::SceneSetup setup;
   if (type != proto::Msg::kScene || !proto::DecodeScene(payload, &setup, &why))
@@ -210,7 +211,7 @@ int Worker::Run(std::string* err) {
   if (!BuildMesh(setup.scene, setup.mesh, &mesh_, &why)) return Fail(why, err);
   frame.clear();
   proto::EncodeReady({mesh_.elems.size(), proto::MeshHash(mesh_)}, &frame);
-  if (!out_.Send(frame)) return 0;
+  if (!out_.Send(frame)) return kExitOk;
 
   Hemicube hemicube(setup.resolution);
   Heartbeat heartbeat(&out_);
@@ -220,15 +221,15 @@ int Worker::Run(std::string* err) {
     for (;;) {
       const double wait = todo_.empty() ? 1.0 : 0.0;
       got = Read(wait, &type, &payload, &why);
-      if (got == kEnd) return 0;
+      if (got == kEnd) return kExitOk;
       if (got == kBad) return Fail(why, err);
       if (got == kTimeout) {
         if (!todo_.empty()) break;
-        if (Now() - heard > kMasterTimeout) { *err = "the master is silent"; return 1; }
+        if (Now() - heard > kMasterTimeout) { *err = "the master is silent"; return kExitFailure; }
         continue;
       }
       heard = Now();
-      int status = 0;
+      int status = kExitOk;
       if (!Handle(type, payload, &status, err)) return status;
     }
     const proto::Assignment a = todo_.front().a;
@@ -243,7 +244,7 @@ int Worker::Run(std::string* err) {
     col.compute_s = ThreadCpuSeconds() - t0;
     frame.clear();
     proto::EncodeColumn(col, &frame);
-    if (!out_.Send(frame)) return 0;  // the master has gone: nothing to report to
+    if (!out_.Send(frame)) return kExitOk;  // the master has gone: nothing to report to
   }
 }
 

@@ -29,6 +29,13 @@ for section in NAME SYNOPSIS DESCRIPTION OPTIONS PROGRESS WORKERS "HOSTS FILE" "
   EXAMPLES "SEE ALSO"; do
   grep -q "^\.SH $section\$" "$MAN" && pass "section ${section//\\\\/}" || fail "no section ${section//\\\\/}"
 done
+# EXIT STATUS lists exactly the statuses of exit_status.h (its values, in
+# order), as the header's comment asks.
+enum=$(sed -n 's/^ *kExit[A-Za-z]* = \([0-9]*\),.*/\1/p' "$TOP/exit_status.h" | tr '\n' ' ')
+page=$(awk '/^\.SH EXIT STATUS/ { on = 1; next } /^\.SH/ { on = 0 } on && prev == ".TP" { print } { prev = $0 }' "$MAN" |
+  sed -n 's/^\.B \([0-9]*\)$/\1/p' | tr '\n' ' ')
+[ -n "$enum" ] && [ "$enum" = "$page" ] && pass "EXIT STATUS lists exit_status.h's statuses: $enum" \
+  || fail "EXIT STATUS lists '$page', exit_status.h has '$enum'"
 grep -q '^srun radiosity' "$MAN" && grep -q '^mpirun ' "$MAN" && pass "Slurm and mpirun examples" \
   || fail "Slurm or mpirun example missing"
 
