@@ -1,0 +1,75 @@
+// What main does once the options are read: list the hosts, be a worker,
+// or run a master from the scene to its outputs. An error ends the program
+// at once with its exit status and one line on stderr.
+#ifndef RADIOSITY_APP_H
+#define RADIOSITY_APP_H
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "checkpoint.h"
+#include "exit_status.h"
+#include "image.h"
+#include "master.h"
+#include "mesh.h"
+#include "options.h"
+#include "progress.h"
+#include "results.h"
+#include "scene.h"
+#include "subdivide.h"
+#include "transport.h"
+
+// --dump-hosts: the hosts of -H FILE as parsed, one a line on stdout.
+ExitStatus DumpHosts(const Options& opts);
+
+// --worker: the worker protocol on stdin/stdout, or on the connection to
+// --connect HOST:PORT.
+ExitStatus WorkerMain(const Options& opts);
+
+// A master's run in the order main takes it.
+class MasterRun {
+ public:
+  explicit MasterRun(const Options& opts);
+  MasterRun(const MasterRun&) = delete;
+  MasterRun& operator=(const MasterRun&) = delete;
+  ~MasterRun();
+
+  // Loads the scene, the camera, the reference and the mesh; checks the
+  // checkpoint to resume and that the one to write can be; opens the
+  // output directory and log.csv; starts the workers.
+  void Build();
+  // Solves until converged, stopped or out of shots or time.
+  void Run();
+  // Writes the results and prints the summary.
+  void WriteOutputs();
+
+ private:
+  void StartWorkers();
+  void Resume();
+  void OnSample(const Sample& s);
+  void Note(const std::string& line, bool warning);
+  std::string FrameName(int wave) const;
+  // Renders the solution once and writes it to every path.
+  std::pair<ShadedMesh, float> Picture(const std::vector<std::string>& paths);
+  void SaveCheckpoint(const RunState& state);
+
+  const Options& opts_;
+  RunOptions run_;  // opts_.run with the run's hooks
+  Scene scene_;
+  Camera camera_;
+  std::vector<glm::dvec3> ref_;  // empty without --reference
+  Mesh mesh_;
+  RunIdentity identity_;
+  Checkpoint resume_;
+  LogCsv log_;
+  std::unique_ptr<Solver> solver_;
+  std::unique_ptr<Progress> progress_;
+  std::unique_ptr<Subdivider> subdivider_;
+  long built_ = 0;  // elements as built, before dividing
+  std::unique_ptr<Transport> transport_;
+  RunResult result_;
+};
+
+#endif
