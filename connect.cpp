@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "check.h"
-#include "sha256.h"
+#include "crypto.h"
 
 namespace {
 

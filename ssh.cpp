@@ -20,7 +20,7 @@
 #include <thread>
 
 #include "check.h"
-#include "sha256.h"
+#include "crypto.h"
 
 namespace {
 
