@@ -78,125 +78,107 @@ std::string Response(const std::string& secret, const std::string& challenge,
   return worker_nonce + HmacSha256(secret, "radiosity worker" + challenge.substr(5) + worker_nonce);
 }
 
-TEST(Connect, RightSecretJoins) {
-  Pair pair;
-  MasterHandshake m(pair.master(), kSecret, 1e300);
-  ASSERT_TRUE(m.Start());
+// The master's side of one handshake, its challenge sent; the test plays
+// the worker on pair_.worker().
+class MasterSide : public ::testing::Test {
+ protected:
+  MasterSide() : master_(pair_.master(), kSecret, 100) {}
+  void SetUp() override { ASSERT_TRUE(master_.Start()); }
+  // Why the master refused the worker; "joined" or "waiting" if it did not.
+  std::string Refusal() {
+    std::string why;
+    switch (Settle(&master_, &why)) {
+      case MasterHandshake::kJoined: return "joined";
+      case MasterHandshake::kWaiting: return "waiting";
+      case MasterHandshake::kRefused: break;
+    }
+    return why;
+  }
+  Pair pair_;
+  MasterHandshake master_;
+};
+
+TEST_F(MasterSide, RightSecretJoins) {
   bool proved = false;
   std::string err;
-  std::thread worker([&] { proved = ProveToMaster(pair.worker(), kSecret, "master", &err); });
-  std::string why;
-  EXPECT_EQ(Settle(&m, &why), MasterHandshake::kJoined) << why;
+  std::thread worker([&] { proved = ProveToMaster(pair_.worker(), kSecret, "master", &err); });
+  EXPECT_EQ(Refusal(), "joined");
   worker.join();
   EXPECT_TRUE(proved) << err;
 }
 
-TEST(Connect, WireBytesAreTheDocumentedOnes) {
-  Pair pair;
-  MasterHandshake m(pair.master(), kSecret, 1e300);
-  ASSERT_TRUE(m.Start());
-  const std::string challenge = pair.Recv(37);
+TEST_F(MasterSide, WireBytesAreTheDocumentedOnes) {
+  const std::string challenge = pair_.Recv(37);
   ASSERT_EQ(challenge.size(), 37u);
   EXPECT_EQ(challenge.substr(0, 5), std::string("RADC\x01", 5));
   const std::string nw(32, 'w');
-  pair.Send(Response(kSecret, challenge, nw));
-  std::string why;
-  ASSERT_EQ(Settle(&m, &why), MasterHandshake::kJoined) << why;
-  EXPECT_EQ(Hex(pair.Recv(32)),
+  pair_.Send(Response(kSecret, challenge, nw));
+  ASSERT_EQ(Refusal(), "joined");
+  EXPECT_EQ(Hex(pair_.Recv(32)),
             Hex(HmacSha256(kSecret, "radiosity master" + challenge.substr(5) + nw)));
 }
 
-TEST(Connect, WrongSecretRefusedOnBothSides) {
-  Pair pair;
-  MasterHandshake m(pair.master(), kSecret, 1e300);
-  ASSERT_TRUE(m.Start());
+TEST_F(MasterSide, WrongSecretRefusedOnBothSides) {
   bool proved = true;
   std::string err;
   std::thread worker(
-      [&] { proved = ProveToMaster(pair.worker(), "some other secret entirely", "M:7", &err); });
-  std::string why;
-  EXPECT_EQ(Settle(&m, &why), MasterHandshake::kRefused);
-  EXPECT_EQ(why, "does not know the secret");
-  pair.CloseMaster();  // as the listener does
+      [&] { proved = ProveToMaster(pair_.worker(), "some other secret entirely", "M:7", &err); });
+  EXPECT_EQ(Refusal(), "does not know the secret");
+  pair_.CloseMaster();  // as the listener does
   worker.join();
   EXPECT_FALSE(proved);
   EXPECT_EQ(err, "the master at M:7 refused this worker (not the same secret?)");
 }
 
-TEST(Connect, SilentPeerRefusedAtTheDeadline) {
-  Pair pair;
-  MasterHandshake m(pair.master(), kSecret, 100);
-  ASSERT_TRUE(m.Start());
+TEST_F(MasterSide, SilentPeerRefusedAtTheDeadline) {
   std::string why;
-  EXPECT_EQ(m.Read(&why), MasterHandshake::kWaiting);
-  EXPECT_FALSE(m.Late(100, &why));
-  pair.Send(std::string(63, 'x'));  // one byte short
-  EXPECT_EQ(m.Read(&why), MasterHandshake::kWaiting);
-  ASSERT_TRUE(m.Late(100.5, &why));
+  EXPECT_EQ(master_.Read(&why), MasterHandshake::kWaiting);
+  EXPECT_FALSE(master_.Late(100, &why));
+  pair_.Send(std::string(63, 'x'));  // one byte short
+  EXPECT_EQ(master_.Read(&why), MasterHandshake::kWaiting);
+  ASSERT_TRUE(master_.Late(100.5, &why));
   EXPECT_EQ(why, "did not authenticate within 5 s");
 }
 
-TEST(Connect, PeerThatClosesEarlyRefused) {
-  Pair pair;
-  MasterHandshake m(pair.master(), kSecret, 1e300);
-  ASSERT_TRUE(m.Start());
-  pair.Send(std::string(10, 'x'));
-  pair.CloseWorker();
-  std::string why;
-  EXPECT_EQ(Settle(&m, &why), MasterHandshake::kRefused);
-  EXPECT_EQ(why, "closed the connection before authenticating");
+TEST_F(MasterSide, PeerThatClosesEarlyRefused) {
+  pair_.Send(std::string(10, 'x'));
+  pair_.CloseWorker();
+  EXPECT_EQ(Refusal(), "closed the connection before authenticating");
 }
 
-TEST(Connect, GarbageRefused) {
-  Pair pair;
-  MasterHandshake m(pair.master(), kSecret, 1e300);
-  ASSERT_TRUE(m.Start());
-  pair.Send("GET / HTTP/1.1\r\nHost: cluster\r\n\r\n" + std::string(31, '\n'));
-  std::string why;
-  EXPECT_EQ(Settle(&m, &why), MasterHandshake::kRefused);
-  EXPECT_EQ(why, "does not know the secret");
+TEST_F(MasterSide, PeerThatLeavesBeforeTheAnswerRefused) {
+  pair_.Send(Response(kSecret, pair_.Recv(37), std::string(32, 'w')));
+  pair_.CloseWorker();
+  EXPECT_EQ(Refusal(), "closed the connection while authenticating");
 }
 
-TEST(Connect, ReplayedResponseRefused) {
-  std::string recorded, master_mac;
+TEST_F(MasterSide, GarbageRefused) {
+  pair_.Send("GET / HTTP/1.1\r\nHost: cluster\r\n\r\n" + std::string(31, '\n'));
+  EXPECT_EQ(Refusal(), "does not know the secret");
+}
+
+TEST_F(MasterSide, ReplayedResponseRefused) {
+  // A response recorded from a handshake that succeeded...
+  std::string recorded;
   {
-    Pair pair;
-    MasterHandshake m(pair.master(), kSecret, 1e300);
+    Pair earlier;
+    MasterHandshake m(earlier.master(), kSecret, 100);
     ASSERT_TRUE(m.Start());
-    recorded = Response(kSecret, pair.Recv(37), std::string(32, 'w'));
-    pair.Send(recorded);
+    recorded = Response(kSecret, earlier.Recv(37), std::string(32, 'w'));
+    earlier.Send(recorded);
     std::string why;
     ASSERT_EQ(Settle(&m, &why), MasterHandshake::kJoined) << why;
-    master_mac = pair.Recv(32);
   }
-  // The same bytes in a new handshake: the master's nonce is fresh.
-  Pair pair;
-  MasterHandshake m(pair.master(), kSecret, 1e300);
-  ASSERT_TRUE(m.Start());
-  pair.Send(recorded);
-  std::string why;
-  EXPECT_EQ(Settle(&m, &why), MasterHandshake::kRefused);
-  EXPECT_EQ(why, "does not know the secret");
-  // Nor does the master's own MAC serve as a worker's.
-  Pair again;
-  MasterHandshake m2(again.master(), kSecret, 1e300);
-  ASSERT_TRUE(m2.Start());
-  const std::string challenge = again.Recv(37);
-  const std::string nw(32, 'w');
-  again.Send(nw + HmacSha256(kSecret, "radiosity master" + challenge.substr(5) + nw));
-  EXPECT_EQ(Settle(&m2, &why), MasterHandshake::kRefused);
-  EXPECT_EQ(why, "does not know the secret");
+  // ...does not pass this one: its master's nonce is fresh.
+  pair_.Send(recorded);
+  EXPECT_EQ(Refusal(), "does not know the secret");
 }
 
-TEST(Connect, PeerThatLeavesBeforeTheAnswerRefused) {
-  Pair pair;
-  MasterHandshake m(pair.master(), kSecret, 1e300);
-  ASSERT_TRUE(m.Start());
-  pair.Send(Response(kSecret, pair.Recv(37), std::string(32, 'w')));
-  pair.CloseWorker();
-  std::string why;
-  EXPECT_EQ(Settle(&m, &why), MasterHandshake::kRefused);
-  EXPECT_EQ(why, "closed the connection while authenticating");
+TEST_F(MasterSide, MasterMacDoesNotServeAsTheWorkers) {
+  const std::string challenge = pair_.Recv(37);
+  const std::string nw(32, 'w');
+  pair_.Send(nw + HmacSha256(kSecret, "radiosity master" + challenge.substr(5) + nw));
+  EXPECT_EQ(Refusal(), "does not know the secret");
 }
 
 // The worker's side against masters that are not ours. Each "master" has
