@@ -3,7 +3,7 @@
 CXX      ?= g++
 PREFIX   ?= /usr/local
 DESTDIR  ?=
-PKGS     := glm stb libssh
+PKGS     := glm stb libssh libcrypto
 OPTFLAGS ?= -O2 -g
 CXXFLAGS += $(OPTFLAGS) -std=c++17 -Wall -Wextra -MMD -MP
 CPPFLAGS += $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
@@ -16,7 +16,7 @@ NPROC    := $(shell nproc 2>/dev/null || echo 1)
 SAN      := -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := options.cpp app.cpp scene.cpp mesh.cpp hemicube.cpp subdivide.cpp master.cpp results.cpp image.cpp net.cpp transport.cpp worker.cpp sim.cpp hosts.cpp sha256.cpp ssh.cpp connect.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp
+LIB_SRCS  := options.cpp app.cpp scene.cpp mesh.cpp hemicube.cpp subdivide.cpp master.cpp results.cpp image.cpp net.cpp transport.cpp worker.cpp sim.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)
 LIB_OBJS  := $(LIB_SRCS:%.cpp=$(B)/%.o)
 TEST_OBJS := $(TEST_SRCS:tests/%.cpp=$(B)/tests/%.o)

@@ -9,8 +9,8 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include "crypto.h"
 #include "net.h"
-#include "sha256.h"
 
 namespace {
 

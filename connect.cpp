@@ -14,12 +14,12 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
-#include <mutex>
 #include <thread>
 #include <vector>
 
 #include "check.h"
-#include "sha256.h"
+#include "crypto.h"
+#include "source.h"
 
 namespace {
 
@@ -100,57 +100,39 @@ bool RecvAll(int fd, size_t want, double deadline, std::string* out) {
 }
 
 // Accepts and authenticates on a thread of its own, several connections
-// at a time, so that a slow or hostile client delays nobody.
-class Listener : public WorkerSource {
+// at a time, so that a slow or hostile client delays nobody. It waits for
+// one worker: the first to join, or kConnectWait without any, settles it.
+class Listener : public ThreadedSource {
  public:
-  Listener(int fd, const std::string& secret, std::function<void(const std::string&, bool)> note)
-      : listen_fd_(fd), secret_(secret), note_(std::move(note)) {
-    CHECK(::pipe2(wake_, O_CLOEXEC | O_NONBLOCK) == 0);
+  Listener(int fd, const std::string& secret, Note note)
+      : ThreadedSource(std::move(note), 1), listen_fd_(fd), secret_(secret) {
     CHECK(::pipe2(stop_, O_CLOEXEC | O_NONBLOCK) == 0);
     thread_ = std::thread([this] { Run(); });
   }
   ~Listener() override {
     Stop();
-    for (int fd : {wake_[0], wake_[1], stop_[0], stop_[1]}) ::close(fd);
+    for (int fd : stop_) ::close(fd);
   }
-  int fd() const override { return wake_[0]; }
-  void Take(WorkerPool* pool) override;
-  int Expected() const override { return expected_; }
   void Stop() override;
 
  private:
-  struct Arrival {
-    int fd = -1;          // authenticated, or -1
-    std::string peer;
-    std::string refusal;  // why it was refused; empty with fd -1: nobody came in time
-  };
   struct Pending {
-    int fd;
-    std::string peer, nonce, in;
-    double deadline;
+    MasterHandshake handshake;
+    std::string peer;
   };
   void Run();
-  void Push(Arrival a) {
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      done_.push_back(std::move(a));
-    }
-    const char byte = 1;
-    if (::write(wake_[1], &byte, 1) < 0) {}  // a full pipe wakes the pool all the same
-  }
   void Accept(std::vector<Pending>* pending);
-  enum Outcome { kWaiting, kRefused, kJoined };
-  // Reads what pending connection p sent and settles it when it is all in.
-  Outcome Answer(Pending* p);
+  void Refuse(const Pending& p, const std::string& why) {
+    ::close(p.handshake.fd());
+    Delivery d;
+    d.notes.emplace_back("connect-back from " + p.peer + " refused: " + why, true);
+    Deliver(std::move(d));
+  }
 
   int listen_fd_;
   std::string secret_;
-  std::function<void(const std::string&, bool)> note_;
-  int wake_[2], stop_[2];
+  int stop_[2];
   std::thread thread_;
-  std::mutex mu_;
-  std::vector<Arrival> done_;  // guarded by mu_
-  int expected_ = 1;           // waiting for the first worker (the pool's thread only)
   bool stopped_ = false;
 };
 
@@ -160,52 +142,23 @@ void Listener::Accept(std::vector<Pending>* pending) {
   const int fd = ::accept4(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len,
                            SOCK_NONBLOCK | SOCK_CLOEXEC);
   if (fd < 0) return;
-  Pending p{fd, AddressName(reinterpret_cast<sockaddr*>(&addr), len), Nonce(), "",
-            Now() + kHandshake};
   NoDelay(fd);
-  const std::string challenge = std::string(kMagic, sizeof kMagic) + kVersion + p.nonce;
-  // A fresh socket's buffer takes these few bytes at once.
-  if (::send(fd, challenge.data(), challenge.size(), MSG_NOSIGNAL) != ssize_t(challenge.size())) {
+  Pending p{MasterHandshake(fd, secret_, Now() + kHandshake),
+            AddressName(reinterpret_cast<sockaddr*>(&addr), len)};
+  if (!p.handshake.Start()) {
     ::close(fd);
     return;
   }
   pending->push_back(std::move(p));
 }
 
-Listener::Outcome Listener::Answer(Pending* p) {
-  char buf[kResponse];
-  const ssize_t n = ::recv(p->fd, buf, kResponse - p->in.size(), 0);
-  if (n < 0 && (errno == EAGAIN || errno == EINTR)) return kWaiting;
-  if (n <= 0) {
-    Push({-1, p->peer, "closed the connection before authenticating"});
-    ::close(p->fd);
-    return kRefused;
-  }
-  p->in.append(buf, size_t(n));
-  if (p->in.size() < kResponse) return kWaiting;
-  const std::string worker_nonce = p->in.substr(0, kNonce);
-  if (!SameBytes(p->in.substr(kNonce), Mac(secret_, "radiosity worker", p->nonce, worker_nonce))) {
-    Push({-1, p->peer, "does not know the secret"});
-    ::close(p->fd);
-    return kRefused;
-  }
-  if (!SendAll(p->fd, Mac(secret_, "radiosity master", p->nonce, worker_nonce),
-               Now() + kHandshake)) {
-    Push({-1, p->peer, "closed the connection while authenticating"});
-    ::close(p->fd);
-    return kRefused;
-  }
-  Push({p->fd, p->peer, ""});
-  return kJoined;
-}
-
 void Listener::Run() {
   const double give_up = Now() + kConnectWait;
-  bool anyone = false;
+  bool settled = false;
   std::vector<Pending> pending;
   for (;;) {
     std::vector<pollfd> fds{{stop_[0], POLLIN, 0}, {listen_fd_, POLLIN, 0}};
-    for (const Pending& p : pending) fds.push_back({p.fd, POLLIN, 0});
+    for (const Pending& p : pending) fds.push_back({p.handshake.fd(), POLLIN, 0});
     ::poll(fds.data(), fds.size(), 200);
     if (fds[0].revents) break;
     if (fds[1].revents) Accept(&pending);
@@ -213,45 +166,31 @@ void Listener::Run() {
     // fds[2 + i] belongs to pending[i] as it was before this round's accept.
     for (size_t i = fds.size() - 2; i-- > 0;) {
       Pending& p = pending[i];
-      bool keep = true;
-      if (fds[2 + i].revents) {
-        const Outcome o = Answer(&p);
-        keep = o == kWaiting;
-        anyone |= o == kJoined;
-      } else if (now > p.deadline) {
-        Push({-1, p.peer, "did not authenticate within " + std::to_string(int(kHandshake)) + " s"});
-        ::close(p.fd);
-        keep = false;
+      std::string why;
+      MasterHandshake::Outcome o = MasterHandshake::kWaiting;
+      if (fds[2 + i].revents) o = p.handshake.Read(&why);
+      else if (p.handshake.Late(now, &why)) o = MasterHandshake::kRefused;
+      if (o == MasterHandshake::kRefused) {
+        Refuse(p, why);
+      } else if (o == MasterHandshake::kJoined) {
+        Delivery d;
+        d.workers.emplace_back(SocketConn(p.handshake.fd()), "worker at " + p.peer);
+        d.settled = settled ? 0 : 1;
+        settled = true;
+        Deliver(std::move(d));
       }
-      if (!keep) pending.erase(pending.begin() + long(i));
+      if (o != MasterHandshake::kWaiting) pending.erase(pending.begin() + long(i));
     }
-    if (!anyone && now > give_up) {
-      anyone = true;  // said once
-      Push({});
-    }
-  }
-  for (const Pending& p : pending) ::close(p.fd);
-}
-
-void Listener::Take(WorkerPool* pool) {
-  char buf[256];
-  while (::read(wake_[0], buf, sizeof buf) > 0) {}
-  std::vector<Arrival> done;
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    done.swap(done_);
-  }
-  for (Arrival& a : done) {
-    if (a.fd >= 0) {
-      expected_ = 0;
-      pool->Add(SocketConn(a.fd), "worker at " + a.peer);
-    } else if (a.peer.empty()) {
-      expected_ = 0;
-      note_("no worker connected within " + std::to_string(int(kConnectWait)) + " s", true);
-    } else {
-      note_("connect-back from " + a.peer + " refused: " + a.refusal, true);
+    if (!settled && now > give_up) {
+      settled = true;  // said once
+      Delivery d;
+      d.notes.emplace_back("no worker connected within " + std::to_string(int(kConnectWait)) + " s",
+                           true);
+      d.settled = 1;
+      Deliver(std::move(d));
     }
   }
+  for (const Pending& p : pending) ::close(p.handshake.fd());
 }
 
 void Listener::Stop() {
@@ -261,14 +200,69 @@ void Listener::Stop() {
   if (::write(stop_[1], &byte, 1) < 0) {}  // cannot be full: written once
   thread_.join();
   ::close(listen_fd_);
-  std::lock_guard<std::mutex> lock(mu_);
-  for (const Arrival& a : done_)
-    if (a.fd >= 0) ::close(a.fd);
-  done_.clear();
-  expected_ = 0;
+  Drop();
 }
 
 }  // namespace
+
+MasterHandshake::MasterHandshake(int fd, const std::string& secret, double deadline)
+    : fd_(fd), secret_(secret), nonce_(Nonce()), deadline_(deadline) {}
+
+bool MasterHandshake::Start() {
+  const std::string challenge = std::string(kMagic, sizeof kMagic) + kVersion + nonce_;
+  // A fresh socket's buffer takes these few bytes at once.
+  return ::send(fd_, challenge.data(), challenge.size(), MSG_NOSIGNAL) == ssize_t(challenge.size());
+}
+
+MasterHandshake::Outcome MasterHandshake::Read(std::string* refusal) {
+  char buf[kResponse];
+  const ssize_t n = ::recv(fd_, buf, kResponse - in_.size(), 0);
+  if (n < 0 && (errno == EAGAIN || errno == EINTR)) return kWaiting;
+  if (n <= 0) {
+    *refusal = "closed the connection before authenticating";
+    return kRefused;
+  }
+  in_.append(buf, size_t(n));
+  if (in_.size() < kResponse) return kWaiting;
+  const std::string worker_nonce = in_.substr(0, kNonce);
+  if (!SameBytes(in_.substr(kNonce), Mac(secret_, "radiosity worker", nonce_, worker_nonce))) {
+    *refusal = "does not know the secret";
+    return kRefused;
+  }
+  if (!SendAll(fd_, Mac(secret_, "radiosity master", nonce_, worker_nonce), Now() + kHandshake)) {
+    *refusal = "closed the connection while authenticating";
+    return kRefused;
+  }
+  return kJoined;
+}
+
+bool MasterHandshake::Late(double now, std::string* refusal) const {
+  if (now <= deadline_) return false;
+  *refusal = "did not authenticate within " + std::to_string(int(kHandshake)) + " s";
+  return true;
+}
+
+bool ProveToMaster(int fd, const std::string& secret, const std::string& where, std::string* err) {
+  const double deadline = Now() + 2 * kHandshake;
+  std::string challenge, answer;
+  if (!RecvAll(fd, kChallenge, deadline, &challenge) ||
+      challenge.compare(0, sizeof kMagic, kMagic, sizeof kMagic) != 0 ||
+      challenge[sizeof kMagic] != kVersion) {
+    *err = where + " is not a radiosity master listening for workers (of this version)";
+    return false;
+  }
+  const std::string master_nonce = challenge.substr(sizeof kMagic + 1), nonce = Nonce();
+  if (!SendAll(fd, nonce + Mac(secret, "radiosity worker", master_nonce, nonce), deadline) ||
+      !RecvAll(fd, kMac, deadline, &answer)) {
+    *err = "the master at " + where + " refused this worker (not the same secret?)";
+    return false;
+  }
+  if (!SameBytes(answer, Mac(secret, "radiosity master", master_nonce, nonce))) {
+    *err = "the master at " + where + " does not know the secret: not ours";
+    return false;
+  }
+  return true;
+}
 
 bool ReadSecret(const std::string& file, std::string* secret, std::string* err) {
   const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
@@ -406,24 +400,7 @@ int ConnectBack(const std::string& host, int port, const std::string& secret, st
     ::usleep(500000);
   }
   NoDelay(fd);
-  const double deadline = Now() + 2 * kHandshake;
-  std::string challenge, answer;
-  if (!RecvAll(fd, kChallenge, deadline, &challenge) ||
-      challenge.compare(0, sizeof kMagic, kMagic, sizeof kMagic) != 0 ||
-      challenge[sizeof kMagic] != kVersion) {
-    *err = where + " is not a radiosity master listening for workers (of this version)";
-    ::close(fd);
-    return -1;
-  }
-  const std::string master_nonce = challenge.substr(sizeof kMagic + 1), nonce = Nonce();
-  if (!SendAll(fd, nonce + Mac(secret, "radiosity worker", master_nonce, nonce), deadline) ||
-      !RecvAll(fd, kMac, deadline, &answer)) {
-    *err = "the master at " + where + " refused this worker (not the same secret?)";
-    ::close(fd);
-    return -1;
-  }
-  if (!SameBytes(answer, Mac(secret, "radiosity master", master_nonce, nonce))) {
-    *err = "the master at " + where + " does not know the secret: not ours";
+  if (!ProveToMaster(fd, secret, where, err)) {
     ::close(fd);
     return -1;
   }

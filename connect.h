@@ -44,4 +44,34 @@ std::unique_ptr<WorkerSource> Listen(const std::string& host, int port, const st
 // socket to speak the worker protocol on; -1 with *err.
 int ConnectBack(const std::string& host, int port, const std::string& secret, std::string* err);
 
+// The handshake itself (doc/protocol.txt, "Connect-back"), one connection
+// at a time: what Listen and ConnectBack run over their sockets, and what
+// the tests run over socket pairs.
+
+// The master's side, over a non-blocking socket that stays the caller's:
+// Start() sends the challenge; Read(), whenever the socket is readable,
+// takes what the worker sent, and answers once all of it is in and right.
+class MasterHandshake {
+ public:
+  enum Outcome { kWaiting, kRefused, kJoined };
+  // The worker has until `deadline` (on Listen's steady clock) to answer.
+  MasterHandshake(int fd, const std::string& secret, double deadline);
+  bool Start();  // false: the peer is gone already
+  // *refusal gets why, in a few words ("does not know the secret").
+  Outcome Read(std::string* refusal);
+  // Whether `now` is past the deadline (the answer is not all in yet).
+  bool Late(double now, std::string* refusal) const;
+  int fd() const { return fd_; }
+
+ private:
+  int fd_;
+  std::string secret_, nonce_, in_;
+  double deadline_;
+};
+
+// The worker's side, over a connected socket: takes the challenge, proves
+// that it knows the secret and checks that the master does too. *err
+// names the master as `where`.
+bool ProveToMaster(int fd, const std::string& secret, const std::string& where, std::string* err);
+
 #endif

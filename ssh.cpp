@@ -3,9 +3,7 @@
 #include <libssh/callbacks.h>
 #include <libssh/libssh.h>
 
-#include <fcntl.h>
 #include <poll.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -15,12 +13,12 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
-#include <mutex>
 #include <sstream>
 #include <thread>
 
 #include "check.h"
-#include "sha256.h"
+#include "crypto.h"
+#include "source.h"
 
 namespace {
 
@@ -295,22 +293,11 @@ bool Upload(ssh_session s, const SelfImage& self, int timeout_ms, bool* sent, st
   return false;
 }
 
-// What a host's thread hands over to the pool's.
-struct HostResult {
-  size_t host;
-  std::vector<std::unique_ptr<SshConn>> conns;
-  std::vector<std::string> notes;  // for -v
-  std::string error;               // a warning: the host, or some of its slots, failed
-};
-
-class SshLauncher : public WorkerSource {
+// The slots of each host are expected until its thread has delivered.
+class SshLauncher : public ThreadedSource {
  public:
-  SshLauncher(const std::vector<HostSpec>& hosts, const SshOptions& opts,
-              std::function<void(const std::string&, bool)> note);
-  ~SshLauncher() override;
-  int fd() const override { return pipe_[0]; }
-  void Take(WorkerPool* pool) override;
-  int Expected() const override { return expected_; }
+  SshLauncher(const std::vector<HostSpec>& hosts, const SshOptions& opts, Note note);
+  ~SshLauncher() override { Stop(); }
   void Stop() override;
 
  private:
@@ -320,37 +307,29 @@ class SshLauncher : public WorkerSource {
 
   std::vector<HostSpec> hosts_;
   SshOptions opts_;
-  std::function<void(const std::string&, bool)> note_;
   SelfImage self_;
   std::string self_err_;
-  int pipe_[2] = {-1, -1};
   std::vector<std::thread> threads_;
   std::atomic<bool> stop_{false};
   bool stopped_ = false;
-  int expected_ = 0;  // slots of the hosts not taken yet (the pool's thread only)
-  std::mutex mu_;
-  std::vector<HostResult> done_;  // guarded by mu_
 };
 
-SshLauncher::SshLauncher(const std::vector<HostSpec>& hosts, const SshOptions& opts,
-                         std::function<void(const std::string&, bool)> note)
-    : hosts_(hosts), opts_(opts), note_(std::move(note)) {
-  CHECK(::pipe2(pipe_, O_CLOEXEC | O_NONBLOCK) == 0);
+int Slots(const std::vector<HostSpec>& hosts) {
+  int n = 0;
+  for (const HostSpec& h : hosts) n += h.slots;
+  return n;
+}
+
+SshLauncher::SshLauncher(const std::vector<HostSpec>& hosts, const SshOptions& opts, Note note)
+    : ThreadedSource(std::move(note), Slots(hosts)), hosts_(hosts), opts_(opts) {
   ssh_init();  // once, before the threads use libssh
   bool upload = false;
   for (const HostSpec& h : hosts_) {
     CHECK(!h.Local());
     upload |= h.cmd.empty();
-    expected_ += h.slots;
   }
   if (upload) ReadSelf(&self_, &self_err_);
   for (size_t i = 0; i < hosts_.size(); ++i) threads_.emplace_back([this, i] { Run(i); });
-}
-
-SshLauncher::~SshLauncher() {
-  Stop();
-  ::close(pipe_[0]);
-  ::close(pipe_[1]);
 }
 
 void SshLauncher::Stop() {
@@ -358,32 +337,7 @@ void SshLauncher::Stop() {
   stopped_ = true;
   stop_ = true;
   for (std::thread& t : threads_) t.join();  // each gives up at its next step
-  std::lock_guard<std::mutex> lock(mu_);
-  done_.clear();  // channels not yet taken: their workers are stopped
-  expected_ = 0;
-}
-
-void SshLauncher::Take(WorkerPool* pool) {
-  char buf[256];
-  while (::read(pipe_[0], buf, sizeof buf) > 0) {}
-  std::vector<HostResult> done;
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    done.swap(done_);
-  }
-  for (HostResult& r : done) {
-    const HostSpec& h = hosts_[r.host];
-    expected_ -= h.slots;
-    for (const std::string& n : r.notes) note_(h.Label() + ": " + n, false);
-    if (!r.error.empty())
-      note_(h.Label() + ": " + r.error +
-                (r.conns.empty() ? "; skipped"
-                                 : "; " + std::to_string(r.conns.size()) + " of " +
-                                       std::to_string(h.slots) + " workers started"),
-            true);
-    for (size_t k = 0; k < r.conns.size(); ++k)
-      pool->Add(std::move(r.conns[k]), h.Label() + " worker " + std::to_string(k + 1));
-  }
+  Drop();  // channels not yet taken: their workers are stopped
 }
 
 bool SshLauncher::CheckHostKey(ssh_session s, std::vector<std::string>* notes, std::string* err) {
@@ -479,8 +433,11 @@ bool SshLauncher::Connect(const HostSpec& h, std::shared_ptr<Session>* out, std:
 
 void SshLauncher::Run(size_t i) {
   const HostSpec& h = hosts_[i];
-  HostResult r;
-  r.host = i;
+  struct {
+    std::vector<std::unique_ptr<SshConn>> conns;
+    std::vector<std::string> notes;  // for -v
+    std::string error;               // a warning: the host, or some of its slots, failed
+  } r;
   const double t0 = Seconds();
   std::shared_ptr<Session> session;
   std::string path = h.cmd;
@@ -532,12 +489,19 @@ void SshLauncher::Run(size_t i) {
     if (session) ssh_set_blocking(session->get(), 0);  // from now on in the pool's poll loop
   }
   session.reset();
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    if (!stop_) done_.push_back(std::move(r));
-  }
-  const char byte = 1;
-  if (::write(pipe_[1], &byte, 1) < 0) {}  // a full pipe already wakes the pool
+  if (stop_) return;
+  Delivery d;
+  d.settled = h.slots;
+  for (const std::string& n : r.notes) d.notes.emplace_back(h.Label() + ": " + n, false);
+  if (!r.error.empty())
+    d.notes.emplace_back(h.Label() + ": " + r.error +
+                             (r.conns.empty() ? "; skipped"
+                                              : "; " + std::to_string(r.conns.size()) + " of " +
+                                                    std::to_string(h.slots) + " workers started"),
+                         true);
+  for (size_t k = 0; k < r.conns.size(); ++k)
+    d.workers.emplace_back(std::move(r.conns[k]), h.Label() + " worker " + std::to_string(k + 1));
+  Deliver(std::move(d));
 }
 
 }  // namespace
