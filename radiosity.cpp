@@ -31,12 +31,10 @@
 #include "scene.h"
 #include "ssh.h"
 #include "transport.h"
+#include "version.h"
 #include "worker.h"
 #include "subdivide.h"
 
-#ifndef RADIOSITY_VERSION
-#define RADIOSITY_VERSION "0.1"
-#endif
 
 namespace {
 
@@ -313,7 +311,7 @@ int main(int argc, char** argv) {
         break;
       case 'q': verbosity = 0; break;
       case 'v': verbosity = 2; break;
-      case kVersion: std::printf("radiosity %s\n", RADIOSITY_VERSION); return kExitOk;
+      case kVersion: std::printf("radiosity %s\n", kRadiosityVersion); return kExitOk;
       case 'h': std::fputs(kUsage, stdout); return kExitOk;
       case ':': Die(kExitUsage, std::string("option ") + argv[optind - 1] + " needs a value (try 'radiosity --help')");
       default: Die(kExitUsage, std::string("unknown option ") + argv[optind - 1] + " (try 'radiosity --help')");

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "net.h"
+#include "protocol.h"
 
 namespace {
 

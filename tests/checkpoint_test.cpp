@@ -11,7 +11,7 @@
 
 #include <gtest/gtest.h>
 
-#include "net.h"
+#include "mesh.h"
 #include "test_util.h"
 
 namespace {
@@ -211,7 +211,7 @@ TEST(Checkpoint, DivideHistoryReplaysToTheSameMesh) {
   Mesh again = built;
   std::string err;
   ASSERT_TRUE(ReplayDivisions(&again, edits, &err)) << err;
-  EXPECT_EQ(proto::MeshHash(again), proto::MeshHash(m));
+  EXPECT_EQ(MeshHash(again), MeshHash(m));
   Mesh bad = built;
   EXPECT_FALSE(ReplayDivisions(&bad, {2, 2}, &err));
   EXPECT_EQ(err, "division 2 of 2 names element 2, which is not a leaf of the mesh");
@@ -291,7 +291,7 @@ TEST(Checkpoint, ResumedRunEndsExactlyLikeTheWholeRun) {
     EXPECT_EQ(q.status, RunStatus::kConverged);
     EXPECT_EQ(q.shots, r.shots);
     EXPECT_EQ(q.waves, r.waves);
-    EXPECT_EQ(proto::MeshHash(part.mesh), proto::MeshHash(whole.mesh));
+    EXPECT_EQ(MeshHash(part.mesh), MeshHash(whole.mesh));
     EXPECT_TRUE(part.solver.radiosity() == whole.solver.radiosity());
     // The samples after the checkpoint are the whole run's last ones.
     ASSERT_LE(rest.size(), log.size());
