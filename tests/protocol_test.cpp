@@ -153,7 +153,7 @@ TEST(Protocol, HelloRoundTrips) {
     std::string frame;
     proto::EncodeHello(h, &frame);
     const std::string p = PayloadOf(frame, Msg::kHello);
-    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x01\x00", 6));  // magic, version
+    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x02\x00", 6));  // magic, version
     proto::Hello d;
     d.magic = 0;
     d.version = 0;
@@ -164,7 +164,7 @@ TEST(Protocol, HelloRoundTrips) {
     EXPECT_EQ(d.build, b);
   }
   // A build string longer than 256 bytes or not printable is refused.
-  std::string p = "RADW" + std::string("\x01\x00", 2);
+  std::string p = "RADW" + std::string("\x02\x00", 2);
   std::string long_build = p;
   WVar(&long_build, 257);
   long_build += std::string(257, 'x');
@@ -249,7 +249,7 @@ TEST(Protocol, SceneRoundTripsBitForBitAndRebuildsTheSameMesh) {
   Mesh original = MakeMesh(m.scene, m.mesh), rebuilt = MakeMesh(d.scene, d.mesh);
   EXPECT_EQ(rebuilt.elems.size(), original.elems.size());
   EXPECT_GT(original.elems.size(), 500u);
-  EXPECT_EQ(proto::MeshHash(rebuilt), proto::MeshHash(original));
+  EXPECT_EQ(MeshHash(rebuilt), MeshHash(original));
 
   // And with the default mesh options on the plain box of test_util.h.
   proto::SceneSetup box;
@@ -257,7 +257,7 @@ TEST(Protocol, SceneRoundTripsBitForBitAndRebuildsTheSameMesh) {
   frame.clear();
   proto::EncodeScene(box, &frame);
   ASSERT_TRUE(proto::DecodeScene(PayloadOf(frame, Msg::kScene), &d, &err)) << err;
-  EXPECT_EQ(proto::MeshHash(MakeMesh(d.scene, d.mesh)), proto::MeshHash(MakeMesh(box.scene)));
+  EXPECT_EQ(MeshHash(MakeMesh(d.scene, d.mesh)), MeshHash(MakeMesh(box.scene)));
 }
 
 TEST(Protocol, SceneValuesOutOfRangeAreRefused) {
@@ -488,7 +488,7 @@ TEST(Protocol, HugeCountsFailFastWithoutAllocating) {
     sc += std::string(10, '\0');
     EXPECT_FALSE(proto::DecodeScene(sc, &d, &err));
     EXPECT_NE(err.find("face count"), std::string::npos) << err;
-    std::string mats = sc.substr(0, 64);  // fixed fields, then the material count
+    std::string mats = sc.substr(0, 72);  // fixed fields, then the material count
     WVar(&mats, n);
     EXPECT_FALSE(proto::DecodeScene(mats, &d, &err));
     EXPECT_NE(err.find("material count"), std::string::npos) << err;
