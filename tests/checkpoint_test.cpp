@@ -122,6 +122,30 @@ TEST(Checkpoint, RoundTrip) {
   EXPECT_EQ(CompareOptions(a.options, b.options), "");
 }
 
+std::string Hex(const std::string& s) {
+  std::string h;
+  char buf[4];
+  for (char c : s) {
+    std::snprintf(buf, sizeof buf, "%02x", unsigned(uint8_t(c)));
+    h += buf;
+  }
+  return h;
+}
+
+// Values written by the build before coding.h replaced the checkpoint's own
+// writer: format 1 is still written byte for byte (the trailing SHA-256
+// covers every byte before it), and the scene and mesh hashes a checkpoint
+// is checked against are unchanged, so old checkpoints still load.
+TEST(Checkpoint, BytesAndHashesAreThoseOfFormat1) {
+  const std::string bytes = EncodeCheckpoint(Filled());
+  EXPECT_EQ(bytes.size(), 597u);
+  EXPECT_EQ(Hex(bytes.substr(bytes.size() - 32)),
+            "0a91553b9d285d013ba708070345f9854a55bf18e2f741a2d730fbf42e3ad1b4");
+  EXPECT_EQ(Hex(SceneHash(ShadowScene())),
+            "e5ded178170e67915e7e2c974f2f76313e56922c54aa9ce557da0635a7ee8021");
+  EXPECT_EQ(MeshHash(MakeMesh(ShadowScene(), ShadowMesh())), 0x4305479c346ad8daull);
+}
+
 TEST(Checkpoint, TruncatedAtAnyLengthIsRefused) {
   const std::string bytes = EncodeCheckpoint(Filled());
   for (size_t n = 0; n < bytes.size(); ++n) {
