@@ -8,10 +8,8 @@
 // payload must be used up exactly.
 #include "protocol.h"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 
 #include "check.h"
 #include "coding.h"
@@ -378,6 +376,7 @@ bool DecodeWork(const std::string& payload, std::vector<Assignment>* m, std::str
   return true;
 }
 
+// The master's hot path; its loops are GetFormFactors'.
 bool DecodeColumn(const char* data, size_t size, Column* m, std::string* err) {
   Reader r(data, size, err);
   Column c;

@@ -13,6 +13,7 @@
 
 #include "mesh.h"
 #include "test_util.h"
+#include "wire_util.h"
 
 namespace {
 
@@ -120,16 +121,6 @@ TEST(Checkpoint, RoundTrip) {
   EXPECT_EQ(b.run.pending, a.run.pending);
   EXPECT_EQ(b.log, a.log);
   EXPECT_EQ(CompareOptions(a.options, b.options), "");
-}
-
-std::string Hex(const std::string& s) {
-  std::string h;
-  char buf[4];
-  for (char c : s) {
-    std::snprintf(buf, sizeof buf, "%02x", unsigned(uint8_t(c)));
-    h += buf;
-  }
-  return h;
 }
 
 // Values written by the build before coding.h replaced the checkpoint's own

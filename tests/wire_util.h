@@ -1,6 +1,7 @@
-// Helpers for the wire tests (protocol_test, ffcodec_test): raw writers
-// made from doc/protocol.txt (not from coding.h), so that tests can write
-// any bytes, and the payload of one frame.
+// Helpers for the tests of the binary formats (protocol, ffcodec,
+// checkpoint): raw writers made from the documents (doc/protocol.txt, not
+// from coding.h), so that tests can write any bytes; bytes as hex; the
+// payload of one frame.
 #ifndef RADIOSITY_TESTS_WIRE_UTIL_H
 #define RADIOSITY_TESTS_WIRE_UTIL_H
 
