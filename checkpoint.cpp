@@ -9,112 +9,81 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include "coding.h"
 #include "crypto.h"
-#include "net.h"
+#include "protocol.h"
 
 namespace {
 
 constexpr char kMagic[8] = {'R', 'A', 'D', 'C', 'K', 'P', 'T', '\n'};
 constexpr size_t kHeader = 24, kSum = 32;
 
-class Writer {
+// Reads in the order of the format, each value 0 after a short read: the
+// reader stays failed, and DecodeCheckpoint checks it once at the end.
+class In {
  public:
-  void LE(uint64_t v, int bytes) {
-    for (int i = 0; i < bytes; ++i) s.push_back(char(v >> (8 * i)));
-  }
-  void U8(uint8_t v) { LE(v, 1); }
-  void U32(uint32_t v) { LE(v, 4); }
-  void I32(int32_t v) { LE(uint32_t(v), 4); }
-  void I64(int64_t v) { LE(uint64_t(v), 8); }
-  void F64(double d) {
-    uint64_t b;
-    std::memcpy(&b, &d, 8);
-    LE(b, 8);
-  }
-  void Vec(const glm::dvec3& v) { F64(v.x), F64(v.y), F64(v.z); }
-  std::string s;
-};
-
-// Reads what Writer wrote. A short read fails once and stays failed, so
-// that a decoder can read on and check ok() at the end.
-class Reader {
- public:
-  Reader(const char* p, size_t n) : p_(reinterpret_cast<const uint8_t*>(p)), n_(n) {}
-  bool ok() const { return ok_; }
-  size_t left() const { return n_ - pos_; }
-  uint64_t LE(int bytes) {
-    if (!ok_ || left() < size_t(bytes)) {
-      ok_ = false;
-      return 0;
-    }
-    uint64_t v = 0;
-    for (int i = 0; i < bytes; ++i) v |= uint64_t(p_[pos_ + i]) << (8 * i);
-    pos_ += size_t(bytes);
-    return v;
-  }
-  uint8_t U8() { return uint8_t(LE(1)); }
-  bool Bool() { return LE(1) != 0; }
-  uint32_t U32() { return uint32_t(LE(4)); }
-  int32_t I32() { return int32_t(uint32_t(LE(4))); }
-  int64_t I64() { return int64_t(LE(8)); }
+  In(const char* p, size_t n) : r_(p, n, &err_) {}
+  bool ok() const { return r_.ok(); }
+  size_t left() const { return r_.left(); }
+  uint64_t U64() { return Get(8); }
+  uint8_t U8() { return uint8_t(Get(1)); }
+  bool Bool() { return Get(1) != 0; }
+  uint32_t U32() { return uint32_t(Get(4)); }
+  int32_t I32() { return int32_t(uint32_t(Get(4))); }
+  int64_t I64() { return int64_t(Get(8)); }
   double F64() {
-    uint64_t b = LE(8);
-    double d;
-    std::memcpy(&d, &b, 8);
+    double d = 0;
+    r_.F64(&d, "f64");
     return d;
   }
   glm::dvec3 Vec() {
-    glm::dvec3 v;
-    v.x = F64(), v.y = F64(), v.z = F64();
+    glm::dvec3 v(0);
+    r_.Vec(&v, "vec");
     return v;
   }
-  // An array count: no more items than the rest could hold, so that a bad
-  // count never allocates much.
+  // An ARRAY's count: no more items than the rest could hold.
   size_t Count(size_t item_bytes) {
-    const uint64_t n = LE(8);
-    if (!ok_ || n > left() / item_bytes) {
-      ok_ = false;
-      return 0;
-    }
+    uint64_t n = 0;
+    r_.Count64(item_bytes, &n, "count");
     return size_t(n);
   }
   std::string Bytes(size_t n) {
-    if (!ok_ || left() < n) {
-      ok_ = false;
-      return "";
-    }
-    std::string s(reinterpret_cast<const char*>(p_ + pos_), n);
-    pos_ += n;
+    std::string s;
+    r_.Bytes(n, &s, "bytes");
     return s;
   }
 
  private:
-  const uint8_t* p_;
-  size_t n_, pos_ = 0;
-  bool ok_ = true;
+  uint64_t Get(int bytes) {
+    uint64_t v = 0;
+    r_.Fixed(bytes, &v, "integer");
+    return v;
+  }
+  std::string err_;  // unused: a failure is reported as one
+  Reader r_;
 };
 
-void PutOptions(Writer* w, const SolveOptions& o) {
-  w->U8(o.overshoot);
-  w->I32(o.resolution);
-  w->U8(o.rotate);
-  w->U32(o.seed);
-  w->I64(o.log_every);
-  w->I32(o.mesh.elements_per_patch);
-  w->F64(o.mesh.patch_size);
-  w->U8(o.subdivide);
-  w->F64(o.sub.threshold);
-  w->F64(o.sub.floor);
-  w->F64(o.sub.decay);
-  w->F64(o.sub.min_size);
-  w->I32(o.sub.max_level);
-  w->U8(o.sub.waves);
-  w->F64(o.sub.wave_fraction);
-  w->I64(o.sub.between);
-  w->F64(o.sub.quiet);
+void PutOptions(std::string* w, const SolveOptions& o) {
+  PutU8(w, o.overshoot);
+  PutFixed32(w, o.resolution);
+  PutU8(w, o.rotate);
+  PutFixed32(w, o.seed);
+  PutFixed64(w, o.log_every);
+  PutFixed32(w, o.mesh.elements_per_patch);
+  PutF64(w, o.mesh.patch_size);
+  PutU8(w, o.subdivide);
+  PutF64(w, o.sub.threshold);
+  PutF64(w, o.sub.floor);
+  PutF64(w, o.sub.decay);
+  PutF64(w, o.sub.min_size);
+  PutFixed32(w, o.sub.max_level);
+  PutU8(w, o.sub.waves);
+  PutF64(w, o.sub.wave_fraction);
+  PutFixed64(w, o.sub.between);
+  PutF64(w, o.sub.quiet);
 }
 
-SolveOptions GetOptions(Reader* r) {
+SolveOptions GetOptions(In* r) {
   SolveOptions o;
   o.overshoot = r->Bool();
   o.resolution = r->I32();
@@ -137,21 +106,29 @@ SolveOptions GetOptions(Reader* r) {
 }
 
 template <typename T, typename Put>
-void PutArray(Writer* w, const std::vector<T>& v, Put put) {
-  w->LE(v.size(), 8);
+void PutArray(std::string* w, const std::vector<T>& v, Put put) {
+  PutFixed64(w, v.size());
   for (const T& x : v) put(x);
 }
 
 }  // namespace
 
 std::string SceneHash(const Scene& scene) {
-  // The frame of a setup whose options are the defaults: only the scene
-  // varies (the options are compared on their own, CompareOptions).
-  proto::SceneSetup setup;
-  setup.scene = scene;
+  // Format 1 defines it as the SHA-256 of protocol 1's scene frame for the
+  // default options: only the scene varies (the options are compared on
+  // their own, CompareOptions), and the frame's later fields do not enter.
+  std::string payload;
+  PutU8(&payload, 1);        // rotate
+  PutVarint(&payload, 256);  // resolution
+  PutFixed32(&payload, 1);   // seed
+  PutVarint(&payload, 2);    // elements per patch
+  PutF64(&payload, 0);       // patch size
+  proto::PutScene(scene, &payload);
   std::string frame;
-  proto::EncodeScene(setup, &frame);
-  return Sha256Of(frame);
+  PutFixed32(&frame, uint32_t(payload.size()));
+  PutU8(&frame, uint8_t(proto::Msg::kScene));
+  PutFixed(&frame, 0, 3);
+  return Sha256Of(frame + payload);
 }
 
 std::vector<int32_t> DivideHistory(const Mesh& mesh) {
@@ -180,7 +157,7 @@ bool ReplayDivisions(Mesh* mesh, const std::vector<int32_t>& edits, std::string*
 RunIdentity Identify(const Scene& scene, const Mesh& built, const SolveOptions& options) {
   RunIdentity id;
   id.scene_hash = SceneHash(scene);
-  id.base_hash = proto::MeshHash(built);
+  id.base_hash = MeshHash(built);
   id.base_elements = built.elems.size();
   id.options = options;
   return id;
@@ -192,7 +169,7 @@ Checkpoint Capture(const RunIdentity& id, const Mesh& mesh, const Solver& solver
   c.scene_hash = id.scene_hash;
   c.base_hash = id.base_hash;
   c.base_elements = id.base_elements;
-  c.mesh_hash = proto::MeshHash(mesh);
+  c.mesh_hash = MeshHash(mesh);
   c.elements = mesh.elems.size();
   c.patches = mesh.patches.size();
   c.options = id.options;
@@ -231,7 +208,7 @@ bool CheckIdentity(const Checkpoint& c, const RunIdentity& id, std::string* err)
 bool ApplyCheckpoint(const Checkpoint& c, Mesh* mesh, Solver* solver, Subdivider* sub,
                      std::string* err) {
   if (!ReplayDivisions(mesh, c.edits, err)) return false;
-  if (proto::MeshHash(*mesh) != c.mesh_hash || mesh->elems.size() != c.elements ||
+  if (MeshHash(*mesh) != c.mesh_hash || mesh->elems.size() != c.elements ||
       mesh->patches.size() != c.patches) {
     *err = "its " + std::to_string(c.edits.size()) +
            " divisions do not give the mesh it was made with";
@@ -243,54 +220,52 @@ bool ApplyCheckpoint(const Checkpoint& c, Mesh* mesh, Solver* solver, Subdivider
 }
 
 std::string EncodeCheckpoint(const Checkpoint& c) {
-  Writer w;
-  w.s.append(kMagic, 8);
-  w.U32(kCheckpointVersion);
-  w.U32(0);
-  w.LE(0, 8);  // payload length, filled in below
-  w.s += c.scene_hash;
-  w.LE(c.base_hash, 8);
-  w.LE(c.base_elements, 8);
-  w.LE(c.mesh_hash, 8);
-  w.LE(c.elements, 8);
-  w.LE(c.patches, 8);
+  std::string w(kMagic, 8);
+  PutFixed32(&w, kCheckpointVersion);
+  PutFixed32(&w, 0);
+  PutFixed64(&w, 0);  // payload length, filled in below
+  w += c.scene_hash;
+  PutFixed64(&w, c.base_hash);
+  PutFixed64(&w, c.base_elements);
+  PutFixed64(&w, c.mesh_hash);
+  PutFixed64(&w, c.elements);
+  PutFixed64(&w, c.patches);
   PutOptions(&w, c.options);
-  PutArray(&w, c.edits, [&](int32_t e) { w.I32(e); });
+  PutArray(&w, c.edits, [&](int32_t e) { PutFixed32(&w, e); });
   const SolverState& s = c.solver;
-  w.I64(s.shots);
-  w.Vec(s.unshot_sum);
-  w.F64(s.abs_sum);
-  PutArray(&w, s.b, [&](const glm::dvec3& v) { w.Vec(v); });
-  PutArray(&w, s.unshot, [&](const glm::dvec3& v) { w.Vec(v); });
-  PutArray(&w, s.lit, [&](uint8_t x) { w.U8(x); });
-  PutArray(&w, s.blind, [&](uint8_t x) { w.U8(x); });
-  PutArray(&w, s.times_shot, [&](int32_t x) { w.I32(x); });
-  w.U8(c.has_subdivider);
+  PutFixed64(&w, s.shots);
+  PutVec(&w, s.unshot_sum);
+  PutF64(&w, s.abs_sum);
+  PutArray(&w, s.b, [&](const glm::dvec3& v) { PutVec(&w, v); });
+  PutArray(&w, s.unshot, [&](const glm::dvec3& v) { PutVec(&w, v); });
+  PutArray(&w, s.lit, [&](uint8_t x) { PutU8(&w, x); });
+  PutArray(&w, s.blind, [&](uint8_t x) { PutU8(&w, x); });
+  PutArray(&w, s.times_shot, [&](int32_t x) { PutFixed32(&w, x); });
+  PutU8(&w, c.has_subdivider);
   if (c.has_subdivider) {
     const SubdividerState& d = c.subdivider;
-    w.F64(d.threshold);
-    w.I64(d.last_pass);
-    w.I64(d.wave_start_leaves);
-    w.I64(d.divided_in_wave);
-    w.U8(d.finished);
-    w.U8(d.quiet);
-    w.I64(d.passes);
-    w.F64(d.seconds);
+    PutF64(&w, d.threshold);
+    PutFixed64(&w, d.last_pass);
+    PutFixed64(&w, d.wave_start_leaves);
+    PutFixed64(&w, d.divided_in_wave);
+    PutU8(&w, d.finished);
+    PutU8(&w, d.quiet);
+    PutFixed64(&w, d.passes);
+    PutF64(&w, d.seconds);
   }
   const RunState& r = c.run;
-  w.I32(r.wave);
-  w.I64(r.wave_start);
-  w.F64(r.best);
-  w.I64(r.best_at);
-  w.F64(r.seconds);
-  w.I64(r.columns);
-  PutArray(&w, r.pending, [&](int32_t p) { w.I32(p); });
-  w.LE(c.log.size(), 8);
-  w.s += c.log;
-  const uint64_t n = w.s.size() - kHeader;
-  for (int i = 0; i < 8; ++i) w.s[16 + i] = char(n >> (8 * i));
-  w.s += Sha256Of(w.s);
-  return w.s;
+  PutFixed32(&w, r.wave);
+  PutFixed64(&w, r.wave_start);
+  PutF64(&w, r.best);
+  PutFixed64(&w, r.best_at);
+  PutF64(&w, r.seconds);
+  PutFixed64(&w, r.columns);
+  PutArray(&w, r.pending, [&](int32_t p) { PutFixed32(&w, p); });
+  PutFixed64(&w, c.log.size());
+  w += c.log;
+  EncodeFixed64(&w[16], w.size() - kHeader);
+  w += Sha256Of(w);
+  return w;
 }
 
 bool DecodeCheckpoint(const std::string& bytes, Checkpoint* c, std::string* err) {
@@ -298,10 +273,10 @@ bool DecodeCheckpoint(const std::string& bytes, Checkpoint* c, std::string* err)
     *err = "not a radiosity checkpoint (no RADCKPT magic)";
     return false;
   }
-  Reader h(bytes.data(), bytes.size());
+  In h(bytes.data(), bytes.size());
   h.Bytes(8);
   const uint32_t version = h.U32(), reserved = h.U32();
-  const uint64_t n = h.LE(8);
+  const uint64_t n = h.U64();
   if (!h.ok()) {
     *err = "truncated: " + std::to_string(bytes.size()) + " bytes, shorter than the header";
     return false;
@@ -323,14 +298,14 @@ bool DecodeCheckpoint(const std::string& bytes, Checkpoint* c, std::string* err)
     *err = "corrupt: the SHA-256 checksum does not match";
     return false;
   }
-  Reader r(bytes.data() + kHeader, size_t(n));
+  In r(bytes.data() + kHeader, size_t(n));
   Checkpoint k;
   k.scene_hash = r.Bytes(32);
-  k.base_hash = r.LE(8);
-  k.base_elements = r.LE(8);
-  k.mesh_hash = r.LE(8);
-  k.elements = r.LE(8);
-  k.patches = r.LE(8);
+  k.base_hash = r.U64();
+  k.base_elements = r.U64();
+  k.mesh_hash = r.U64();
+  k.elements = r.U64();
+  k.patches = r.U64();
   k.options = GetOptions(&r);
   k.edits.resize(r.Count(4));
   for (int32_t& e : k.edits) e = r.I32();

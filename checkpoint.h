@@ -19,8 +19,8 @@
 // Payload, in this order (u8/u32/i32/i64/u64/f64 fixed width; vec = 3 f64;
 // ARRAY<T> = u64 count, then count T):
 //
-//   scene     32 bytes SHA-256 of the scene as sent to workers (faces,
-//             materials, bounding box: SceneHash), u64 MeshHash and u64
+//   scene     32 bytes SHA-256 of the scene as protocol 1 sent it to
+//             workers (faces, materials, bounding box: SceneHash), u64 MeshHash and u64
 //             element count of the mesh as built, u64 MeshHash, u64
 //             element count and u64 patch count of the mesh as saved
 //   options   what shapes the answer (SolveOptions, in field order): u8
@@ -84,7 +84,8 @@ struct Checkpoint {
 
 // SHA-256 of what identifies a scene's answer: its faces (vertices,
 // normals, areas, materials, indices), its materials and bounding box, as
-// the scene frame of the protocol encodes them.
+// the scene frame of protocol version 1 encodes them with the default
+// options (fixed with this format, whatever the protocol becomes).
 std::string SceneHash(const Scene& scene);
 
 // The elements of `mesh` that Divide() divided, in the order it ran (a

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <unordered_map>
 
 #include "check.h"
+#include "hash.h"
 
 namespace {
 
@@ -483,4 +485,46 @@ void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out) {
       add(to, from);
     }
   }
+}
+
+namespace {
+
+// One step of the hash: the state xor a 64-bit word, through splitmix64.
+uint64_t Mix(uint64_t h, uint64_t w) { return SplitMix64(h ^ w); }
+
+uint64_t Bits(double d) {
+  uint64_t b;
+  std::memcpy(&b, &d, 8);
+  return b;
+}
+
+uint64_t Int(int v) { return uint64_t(uint32_t(v)); }
+
+}  // namespace
+
+uint64_t MeshHash(const Mesh& mesh) {
+  uint64_t h = 0x6d657368;  // "mesh"
+  h = Mix(h, mesh.verts.size());
+  h = Mix(h, mesh.elems.size());
+  h = Mix(h, mesh.patches.size());
+  h = Mix(h, mesh.faces.size());
+  for (const auto& v : mesh.verts) {
+    h = Mix(h, Bits(v.x));
+    h = Mix(h, Bits(v.y));
+    h = Mix(h, Bits(v.z));
+  }
+  for (const Element& e : mesh.elems) {
+    h = Mix(h, Int(e.v[0]) | Int(e.v[1]) << 32);
+    h = Mix(h, Int(e.v[2]) | Int(e.v[3]) << 32);
+    h = Mix(h, Int(e.patch) | Int(e.parent) << 32);
+    h = Mix(h, Int(e.first_child) | Int(e.level) << 32);
+    h = Mix(h, Bits(e.area));
+  }
+  for (const Patch& p : mesh.patches) {
+    h = Mix(h, Int(p.face) | uint64_t(p.elements.size()) << 32);
+    h = Mix(h, Bits(p.center.x));
+    h = Mix(h, Bits(p.center.y));
+    h = Mix(h, Bits(p.center.z));
+  }
+  return h;
 }

@@ -159,4 +159,9 @@ int Outline(const Element& e, int out[8]);
 // ConnectEdges().
 void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out);
 
+// A hash of the mesh geometry and hierarchy (vertex bits, element
+// vertices, parents), to check that a worker built what the master has
+// and that a checkpoint's divisions replay to the mesh it saved.
+uint64_t MeshHash(const Mesh& mesh);
+
 #endif

@@ -7,9 +7,6 @@
 #include "exit_status.h"
 #include "options.h"
 
-#ifndef RADIOSITY_VERSION
-#define RADIOSITY_VERSION "0.1"
-#endif
 
 int main(int argc, char** argv) {
   Options opts;
@@ -17,7 +14,7 @@ int main(int argc, char** argv) {
   switch (ParseOptions(argc, argv, &opts, &err)) {
     case Parsed::kRun: break;
     case Parsed::kHelp: std::fputs(kUsage, stdout); return kExitOk;
-    case Parsed::kVersion: std::printf("radiosity %s\n", RADIOSITY_VERSION); return kExitOk;
+    case Parsed::kVersion: std::printf("radiosity %s\n", kRadiosityVersion); return kExitOk;
     case Parsed::kDumpHosts: return DumpHosts(opts);
     case Parsed::kWorker: return WorkerMain(opts);
     case Parsed::kNoScene: std::fputs(kUsage, stderr); return kExitUsage;

@@ -43,7 +43,7 @@
 
 #include "hemicube.h"
 #include "mesh.h"
-#include "net.h"
+#include "protocol.h"
 #include "transport.h"
 
 struct SimOptions {

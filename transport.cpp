@@ -172,11 +172,13 @@ double InProcessTransport::Now() { return WallNow(); }
 
 WorkerPool::WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh,
                        const PoolOptions& opts)
-    : mesh_(mesh), base_elements_(mesh.elems.size()), mesh_hash_(proto::MeshHash(mesh)),
+    : mesh_(mesh), base_elements_(mesh.elems.size()), mesh_hash_(MeshHash(mesh)),
       opts_(opts),
       epoch_(WallNow()) {
   proto::EncodeHello(proto::Hello(), &scene_frame_);
-  proto::EncodeScene(setup, &scene_frame_);
+  proto::SceneSetup told = setup;  // the workers' heartbeats: ours
+  told.heartbeat_s = opts.heartbeat_s;
+  proto::EncodeScene(told, &scene_frame_);
 }
 
 WorkerPool::~WorkerPool() { Shutdown(); }

@@ -17,7 +17,7 @@
 
 #include "hemicube.h"
 #include "mesh.h"
-#include "net.h"
+#include "protocol.h"
 
 struct WorkerEvent {
   enum Kind { kJoined, kColumn, kLost } kind;

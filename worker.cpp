@@ -16,7 +16,7 @@
 #include "hemicube.h"
 #include "master.h"
 #include "mesh.h"
-#include "net.h"
+#include "protocol.h"
 #include "transport.h"
 
 namespace {
@@ -53,11 +53,13 @@ class Sender {
   double last_;
 };
 
-// Sends a heartbeat whenever nothing else went out for a second, so the
-// master can tell a long column from a dead worker.
+// Sends a heartbeat whenever nothing else went out for `period` seconds
+// (the master's, from the scene setup), so the master can tell a long
+// column from a dead worker.
 class Heartbeat {
  public:
-  explicit Heartbeat(Sender* out) : out_(out), thread_([this] { Loop(); }) {}
+  Heartbeat(Sender* out, double period)
+      : out_(out), period_(period), thread_([this] { Loop(); }) {}
   ~Heartbeat() {
     {
       std::lock_guard<std::mutex> lock(mu_);
@@ -70,14 +72,16 @@ class Heartbeat {
  private:
   void Loop() {
     std::unique_lock<std::mutex> lock(mu_);
-    while (!cv_.wait_for(lock, std::chrono::milliseconds(250), [this] { return stop_; })) {
-      if (Now() - out_->last() < 1.0) continue;
+    const auto poll = std::chrono::duration<double>(period_ / 4);
+    while (!cv_.wait_for(lock, poll, [this] { return stop_; })) {
+      if (Now() - out_->last() < period_) continue;
       std::string frame;
       proto::EncodeHeartbeat(&frame);
       if (!out_->Send(frame)) return;
     }
   }
   Sender* out_;
+  const double period_;
   std::mutex mu_;
   std::condition_variable cv_;
   bool stop_ = false;
@@ -210,11 +214,11 @@ int Worker::Run(std::string* err) {
     return Fail("expected a scene: " + why, err);
   if (!BuildMesh(setup.scene, setup.mesh, &mesh_, &why)) return Fail(why, err);
   frame.clear();
-  proto::EncodeReady({mesh_.elems.size(), proto::MeshHash(mesh_)}, &frame);
+  proto::EncodeReady({mesh_.elems.size(), MeshHash(mesh_)}, &frame);
   if (!out_.Send(frame)) return kExitOk;
 
   Hemicube hemicube(setup.resolution);
-  Heartbeat heartbeat(&out_);
+  Heartbeat heartbeat(&out_, setup.heartbeat_s);
   double heard = Now();
   for (;;) {
     // Take in everything that has arrived; wait only when idle.

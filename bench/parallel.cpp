@@ -42,7 +42,7 @@
 #include "hemicube.h"
 #include "master.h"
 #include "mesh.h"
-#include "net.h"
+#include "protocol.h"
 #include "results.h"
 #include "scene.h"
 #include "sim.h"

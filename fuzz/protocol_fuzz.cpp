@@ -1,4 +1,4 @@
-// libFuzzer target: the protocol decoder (net.h) as a master or worker
+// libFuzzer target: the protocol decoder (protocol.h) as a master or worker
 // meets it: bytes from the peer cut into reads of any size, split into
 // frames by FrameReader, each frame decoded by its message's decoder
 // (Hello, Scene, Ready, Work, Column, Divide, Error; Heartbeat and Bye are
@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "net.h"
+#include "protocol.h"
 
 namespace {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "net.h"
+#include "protocol.h"
 #include "scene.h"
 
 namespace {

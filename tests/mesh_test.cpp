@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <map>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -112,6 +113,34 @@ TEST(Mesh, RefusesAbsurdElementCounts) {
   std::string err;
   EXPECT_FALSE(BuildMesh(s, o, &m, &err));
   EXPECT_NE(err.find("elements"), std::string::npos) << err;
+}
+
+TEST(Mesh, MeshHashSeesGeometryAndHierarchy) {
+  const Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  const Mesh a = MakeMesh(s);
+  const uint64_t h = MeshHash(a);
+  EXPECT_EQ(MeshHash(MakeMesh(s)), h);
+  MeshOptions o;
+  o.elements_per_patch = 3;
+  EXPECT_NE(MeshHash(MakeMesh(s, o)), h);
+  Mesh b = a;
+  b.verts[17].y = std::nextafter(b.verts[17].y, 2.0);  // one bit of one coordinate
+  EXPECT_NE(MeshHash(b), h);
+  b = a;
+  std::swap(b.elems[3].v[0], b.elems[3].v[1]);
+  EXPECT_NE(MeshHash(b), h);
+  b = a;
+  b.elems[5].first_child = int(b.elems.size());  // as if divided
+  EXPECT_NE(MeshHash(b), h);
+  b = a;
+  b.elems.push_back(b.elems.back());
+  EXPECT_NE(MeshHash(b), h);
+  Scene moved = s;
+  for (auto& f : moved.faces)
+    for (auto& v : f.verts) v.x += 1;
+  moved.lo.x += 1;
+  moved.hi.x += 1;
+  EXPECT_NE(MeshHash(MakeMesh(moved)), h);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // The wire protocol between master and workers: framing and message
-// codecs. doc/protocol.txt describes every byte; this file is its code.
+// codecs (the bytes coded by coding.h, the form factors by ffcodec.h).
+// doc/protocol.txt describes every byte; this file is its code.
 //
 // A frame is an 8-byte header (u32 length of the payload, u8 type, three
 // zero bytes) followed by the payload; all integers little-endian. A frame
@@ -7,8 +8,8 @@
 // decode exactly (too short, bytes left over, out-of-range values) is an
 // error of that connection: the decoders return false with a message and
 // the caller closes the connection, never the program.
-#ifndef RADIOSITY_NET_H
-#define RADIOSITY_NET_H
+#ifndef RADIOSITY_PROTOCOL_H
+#define RADIOSITY_PROTOCOL_H
 
 #include <cstdint>
 #include <string>
@@ -17,11 +18,11 @@
 #include "hemicube.h"
 #include "mesh.h"
 #include "scene.h"
+#include "version.h"
 
 namespace proto {
 
 constexpr uint32_t kMagic = 0x57444152;  // "RADW" on the wire
-constexpr uint16_t kVersion = 1;
 constexpr size_t kHeaderSize = 8;
 constexpr uint32_t kMaxFrame = 256u << 20;  // the scene frame is the largest
 
@@ -38,10 +39,6 @@ enum class Msg : uint8_t {
 };
 const char* MsgName(Msg m);
 
-// This build's identity, sent in Hello: version, protocol and the
-// compiler, so that master and workers build identical meshes.
-std::string BuildId();
-
 struct Hello {
   uint32_t magic = kMagic;
   uint16_t version = kVersion;
@@ -57,7 +54,11 @@ struct SceneSetup {
   int32_t resolution = 256;
   uint8_t rotate = 1;
   uint32_t seed = 1;
+  // The worker sends a heartbeat after this much silence (the master's
+  // PoolOptions::heartbeat_s), in (0, kMaxHeartbeat] seconds.
+  double heartbeat_s = 1.0;
 };
+constexpr double kMaxHeartbeat = 3600;
 
 struct Ready {
   uint64_t elements = 0;  // elements in the worker's mesh
@@ -81,31 +82,18 @@ struct Column {
 // Appends a whole frame (header and payload) to *out.
 void EncodeHello(const Hello& m, std::string* out);
 void EncodeScene(const SceneSetup& m, std::string* out);
+// The scene part of the scene frame, its last field: bounding box,
+// materials, faces. Checkpoints hash it too (SceneHash): a change here
+// needs a new checkpoint format version.
+void PutScene(const Scene& scene, std::string* out);
 void EncodeReady(const Ready& m, std::string* out);
 void EncodeWork(const std::vector<Assignment>& m, std::string* out);
-// Element ids are sent as runs of consecutive ids; form factors as 16-bit
-// codes with 12 significant bits (rounding error 2^-12, kFormFactorRounding)
-// and error diffusion (the rounding residual carried on, largest exponents
-// first), so that each decoded form factor is within kFormFactorError
-// (2^-10) of its own, and the decoded column sum within kColumnSumError
-// (one code step, 2^-11) of the largest form factor of the true sum, in
-// practice far closer. Values outside the 16-bit codes (below 2^-31, or 2
-// and more) are escaped to a 24-bit code (relative error 2^-17).
+// The column's form factors as ffcodec.h codes them.
 void EncodeColumn(const Column& m, std::string* out);
 void EncodeDivide(const std::vector<int32_t>& elems, std::string* out);
 void EncodeHeartbeat(std::string* out);
 void EncodeError(const std::string& text, std::string* out);
 void EncodeBye(std::string* out);
-
-// Column coding bounds (doc/protocol.txt, "column"). Per form factor F
-// and its decoded F': |F' - F| <= kFormFactorError F. Per column:
-// |sum F' - sum F| <= kColumnSumError (1 + kFormFactorError) max F, plus
-// 2^-17 F for each F below 2^-31 (escaped) and the rounding of the sums
-// themselves. kFormFactorRounding is the rounding of one 16-bit code (half
-// its step): the scale of a form factor's typical error.
-constexpr double kFormFactorError = 1.0 / (1 << 10);
-constexpr double kFormFactorRounding = 1.0 / (1 << 12);
-constexpr double kColumnSumError = 1.0 / (1 << 11);
 
 // Payload decoders: the payload of one frame of the matching type. False
 // with *err (one line, no prefix) when it does not decode exactly.
@@ -135,10 +123,6 @@ class FrameReader {
   size_t pos_ = 0;
   bool bad_ = false;
 };
-
-// A hash of the mesh geometry and hierarchy (vertex bits, element
-// vertices, parents), to check that a worker built what the master has.
-uint64_t MeshHash(const Mesh& mesh);
 
 }  // namespace proto
 
