@@ -12,13 +12,13 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <chrono>
 #include <cstring>
 #include <mutex>
 #include <thread>
 #include <vector>
 
 #include "check.h"
+#include "clock.h"
 #include "sha256.h"
 
 namespace {
@@ -30,11 +30,6 @@ constexpr size_t kNonce = 32, kMac = 32;
 constexpr size_t kChallenge = sizeof kMagic + 1 + kNonce;  // master -> worker
 constexpr size_t kResponse = kNonce + kMac;                // worker -> master
 constexpr double kHandshake = 5;  // seconds for a connection to authenticate
-
-double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 std::string Nonce() {
   std::string n(kNonce, '\0');
@@ -71,7 +66,7 @@ void NoDelay(int fd) {
 // Blocking-style I/O on a non-blocking socket, up to a deadline.
 bool Wait(int fd, short events, double deadline) {
   for (;;) {
-    const double left = deadline - Now();
+    const double left = deadline - MonotonicSeconds();
     if (left <= 0) return false;
     pollfd p{fd, events, 0};
     const int n = ::poll(&p, 1, int(left * 1000) + 1);
@@ -161,7 +156,7 @@ void Listener::Accept(std::vector<Pending>* pending) {
                            SOCK_NONBLOCK | SOCK_CLOEXEC);
   if (fd < 0) return;
   Pending p{fd, AddressName(reinterpret_cast<sockaddr*>(&addr), len), Nonce(), "",
-            Now() + kHandshake};
+            MonotonicSeconds() + kHandshake};
   NoDelay(fd);
   const std::string challenge = std::string(kMagic, sizeof kMagic) + kVersion + p.nonce;
   // A fresh socket's buffer takes these few bytes at once.
@@ -190,7 +185,7 @@ Listener::Outcome Listener::Answer(Pending* p) {
     return kRefused;
   }
   if (!SendAll(p->fd, Mac(secret_, "radiosity master", p->nonce, worker_nonce),
-               Now() + kHandshake)) {
+               MonotonicSeconds() + kHandshake)) {
     Push({-1, p->peer, "closed the connection while authenticating"});
     ::close(p->fd);
     return kRefused;
@@ -200,7 +195,7 @@ Listener::Outcome Listener::Answer(Pending* p) {
 }
 
 void Listener::Run() {
-  const double give_up = Now() + kConnectWait;
+  const double give_up = MonotonicSeconds() + kConnectWait;
   bool anyone = false;
   std::vector<Pending> pending;
   for (;;) {
@@ -209,7 +204,7 @@ void Listener::Run() {
     ::poll(fds.data(), fds.size(), 200);
     if (fds[0].revents) break;
     if (fds[1].revents) Accept(&pending);
-    const double now = Now();
+    const double now = MonotonicSeconds();
     // fds[2 + i] belongs to pending[i] as it was before this round's accept.
     for (size_t i = fds.size() - 2; i-- > 0;) {
       Pending& p = pending[i];
@@ -369,7 +364,7 @@ std::unique_ptr<WorkerSource> Listen(const std::string& host, int port, const st
 }
 
 int ConnectBack(const std::string& host, int port, const std::string& secret, std::string* err) {
-  const double give_up = Now() + kConnectWait;
+  const double give_up = MonotonicSeconds() + kConnectWait;
   const std::string where = host + ":" + std::to_string(port);
   int fd = -1;
   // The master may not be listening yet: srun and mpirun start everyone
@@ -391,7 +386,7 @@ int ConnectBack(const std::string& host, int port, const std::string& secret, st
       socklen_t len = sizeof so_error;
       const bool ok =
           (::connect(fd, a->ai_addr, a->ai_addrlen) == 0 ||
-           (errno == EINPROGRESS && Wait(fd, POLLOUT, std::min(give_up, Now() + 5)) &&
+           (errno == EINPROGRESS && Wait(fd, POLLOUT, std::min(give_up, MonotonicSeconds() + 5)) &&
             ::getsockopt(fd, SOL_SOCKET, SO_ERROR, &so_error, &len) == 0 && so_error == 0));
       if (!ok) {
         *err = "cannot connect to " + where + ": " +
@@ -402,11 +397,11 @@ int ConnectBack(const std::string& host, int port, const std::string& secret, st
     }
     ::freeaddrinfo(res);
     if (fd >= 0) break;
-    if (Now() + 0.5 > give_up) return -1;
+    if (MonotonicSeconds() + 0.5 > give_up) return -1;
     ::usleep(500000);
   }
   NoDelay(fd);
-  const double deadline = Now() + 2 * kHandshake;
+  const double deadline = MonotonicSeconds() + 2 * kHandshake;
   std::string challenge, answer;
   if (!RecvAll(fd, kChallenge, deadline, &challenge) ||
       challenge.compare(0, sizeof kMagic, kMagic, sizeof kMagic) != 0 ||

@@ -24,13 +24,14 @@
 #include "errorchart.h"
 #include "hosts.h"
 #include "image.h"
-#include "master.h"
+#include "inprocess.h"
 #include "mesh.h"
+#include "pool.h"
 #include "progress.h"
 #include "results.h"
 #include "scene.h"
+#include "scheduler.h"
 #include "ssh.h"
-#include "transport.h"
 #include "worker.h"
 #include "subdivide.h"
 
@@ -465,6 +466,9 @@ int main(int argc, char** argv) {
   auto note = [&](const std::string& line, bool warning) {
     if (verbosity == 1) progress.Note(line);
     else if (warning || verbosity >= 2) std::fprintf(stderr, "radiosity: %s\n", line.c_str());
+  };
+  run.fallback = [&] {
+    return std::make_unique<InProcessTransport>(mesh, run.resolution, run.rotate, run.seed);
   };
   std::unique_ptr<Transport> transport;
   if (workers == 0 && !remote) {

@@ -2,7 +2,6 @@
 
 #include <atomic>
 #include <cerrno>
-#include <chrono>
 #include <condition_variable>
 #include <cstring>
 #include <deque>
@@ -12,23 +11,17 @@
 #include <poll.h>
 #include <unistd.h>
 
+#include "clock.h"
 #include "hemicube.h"
-#include "master.h"
 #include "mesh.h"
 #include "net.h"
-#include "transport.h"
 
 namespace {
-
-double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 // Frames to the master, from the main thread and the heartbeat thread.
 class Sender {
  public:
-  explicit Sender(int fd) : fd_(fd), last_(Now()) {}
+  explicit Sender(int fd) : fd_(fd), last_(MonotonicSeconds()) {}
   bool Send(const std::string& frame) {
     std::lock_guard<std::mutex> lock(mu_);
     size_t done = 0;
@@ -38,7 +31,7 @@ class Sender {
       if (n <= 0) return false;
       done += size_t(n);
     }
-    last_ = Now();
+    last_ = MonotonicSeconds();
     return true;
   }
   double last() {
@@ -70,7 +63,7 @@ class Heartbeat {
   void Loop() {
     std::unique_lock<std::mutex> lock(mu_);
     while (!cv_.wait_for(lock, std::chrono::milliseconds(250), [this] { return stop_; })) {
-      if (Now() - out_->last() < 1.0) continue;
+      if (MonotonicSeconds() - out_->last() < 1.0) continue;
       std::string frame;
       proto::EncodeHeartbeat(&frame);
       if (!out_->Send(frame)) return;
@@ -119,14 +112,14 @@ class Worker {
 
 Worker::Got Worker::Read(double timeout, proto::Msg* type, std::string* payload,
                          std::string* err) {
-  const double until = Now() + timeout;
+  const double until = MonotonicSeconds() + timeout;
   for (;;) {
     switch (in_.Next(type, payload, err)) {
       case proto::FrameReader::kFrame: return kFrame;
       case proto::FrameReader::kBad: return kBad;
       case proto::FrameReader::kNeedMore: break;
     }
-    const double left = until - Now();
+    const double left = until - MonotonicSeconds();
     pollfd p{in_fd_, POLLIN, 0};
     int n = ::poll(&p, 1, left <= 0 ? 0 : int(left * 1000) + 1);
     if (n < 0 && errno != EINTR) { *err = std::string("poll: ") + std::strerror(errno); return kBad; }
@@ -152,7 +145,7 @@ bool Worker::Handle(proto::Msg type, const std::string& payload, int* status,
           why = "patch " + std::to_string(a.patch) + " out of range";
           break;
         }
-        todo_.push_back({a, Now()});
+        todo_.push_back({a, MonotonicSeconds()});
       }
       if (!why.empty()) break;
       return true;
@@ -214,7 +207,7 @@ int Worker::Run(std::string* err) {
 
   Hemicube hemicube(setup.resolution);
   Heartbeat heartbeat(&out_);
-  double heard = Now();
+  double heard = MonotonicSeconds();
   for (;;) {
     // Take in everything that has arrived; wait only when idle.
     for (;;) {
@@ -224,10 +217,10 @@ int Worker::Run(std::string* err) {
       if (got == kBad) return Fail(why, err);
       if (got == kTimeout) {
         if (!todo_.empty()) break;
-        if (Now() - heard > kMasterTimeout) { *err = "the master is silent"; return 1; }
+        if (MonotonicSeconds() - heard > kMasterTimeout) { *err = "the master is silent"; return 1; }
         continue;
       }
-      heard = Now();
+      heard = MonotonicSeconds();
       int status = 0;
       if (!Handle(type, payload, &status, err)) return status;
     }
@@ -235,11 +228,10 @@ int Worker::Run(std::string* err) {
     proto::Column col;
     col.patch = a.patch;
     col.k = a.k;
-    col.wait_s = Now() - todo_.front().received;
+    col.wait_s = MonotonicSeconds() - todo_.front().received;
     todo_.pop_front();
     const double t0 = ThreadCpuSeconds();
-    hemicube.Column(mesh_, a.patch, setup.rotate ? ShotAngle(setup.seed, a.patch, a.k) : 0.0,
-                    &col.ff);
+    ShotColumn(&hemicube, mesh_, a.patch, a.k, setup.rotate, setup.seed, &col.ff);
     col.compute_s = ThreadCpuSeconds() - t0;
     frame.clear();
     proto::EncodeColumn(col, &frame);

@@ -12,7 +12,8 @@
 #include <vector>
 
 #include "hemicube.h"
-#include "master.h"
+#include "scheduler.h"
+#include "solver.h"
 #include "mesh.h"
 #include "results.h"
 #include "scene.h"
@@ -87,7 +88,7 @@ int main(int argc, char** argv) {
     const int step = std::max(1, n / 400);
     int columns = 0;
     auto t0 = std::chrono::steady_clock::now();
-    for (int p = 0; p < n; p += step, ++columns) hc.Column(mesh, p, ShotAngle(1, p, 0), &col, &st);
+    for (int p = 0; p < n; p += step, ++columns) ShotColumn(&hc, mesh, p, 0, true, 1, &col, &st);
     double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double per = total / columns;
     const double model =

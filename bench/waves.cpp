@@ -19,10 +19,11 @@
 #include <string>
 #include <vector>
 
-#include "master.h"
 #include "mesh.h"
 #include "results.h"
 #include "scene.h"
+#include "scheduler.h"
+#include "solver.h"
 #include "subdivide.h"
 
 namespace {

@@ -3,14 +3,15 @@
 // hemicube columns so that runs converge to real answers.
 #include <algorithm>
 #include <map>
+#include <memory>
 #include <set>
 
 #include <gtest/gtest.h>
 
-#include "master.h"
+#include "inprocess.h"
 #include "results.h"
+#include "scheduler.h"
 #include "test_util.h"
-#include "transport.h"
 
 namespace {
 
@@ -203,10 +204,85 @@ TEST(Scheduler, MasterTakesOverWhenAllWorkersAreLost) {
   t.lose_at_[3] = 0;
   t.lose_at_[4] = 1;
   Solver solver(m, true);
-  RunResult r = RunMaster(&m, Opts(), &solver, nullptr, &t, nullptr, nullptr);
+  RunOptions o = Opts();
+  o.fallback = [&] { return std::make_unique<InProcessTransport>(m, 32, false, 1); };
+  RunResult r = RunMaster(&m, o, &solver, nullptr, &t, nullptr, nullptr);
   EXPECT_EQ(r.status, RunStatus::kConverged);
   EXPECT_TRUE(r.fell_back);
   EXPECT_LT(solver.UnshotFraction(), 1e-3);
+}
+
+// The fallback is the caller's: made once, when the last worker is lost,
+// and from then on the only transport the scheduler drives.
+TEST(Scheduler, TheInjectedFallbackIsWhatTakesOver) {
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  FakeTransport t(m, 2);
+  t.lose_at_[3] = 0;
+  t.lose_at_[4] = 1;
+  FakeTransport* made = nullptr;
+  int calls = 0;
+  RunOptions o = Opts();
+  o.fallback = [&] {
+    ++calls;
+    auto f = std::make_unique<FakeTransport>(m, 1);
+    made = f.get();
+    return f;
+  };
+  std::vector<std::string> notes;
+  Solver solver(m, true);
+  RunResult r = RunMaster(&m, o, &solver, nullptr, &t, nullptr,
+                          [&](const std::string& line, bool) { notes.push_back(line); });
+  ASSERT_EQ(calls, 1);
+  EXPECT_EQ(r.status, RunStatus::kConverged) << r.why;
+  EXPECT_TRUE(r.fell_back);
+  EXPECT_EQ(r.lost, 2);
+  // The fake fallback's worker was told it joined, like any other.
+  EXPECT_EQ(r.joined, 3);
+  ASSERT_NE(made, nullptr);
+  EXPECT_FALSE(made->log_.empty());
+  long after = 0;  // shots of the fallback's columns
+  for (auto [w, p] : made->log_) after += w == 0;
+  EXPECT_GT(after, 0);
+  EXPECT_NE(std::find(notes.begin(), notes.end(),
+                      "no workers left: the master computes the form factors itself"),
+            notes.end());
+}
+
+// Without a fallback, losing every worker ends the run.
+TEST(Scheduler, WithoutAFallbackLosingEveryWorkerEndsTheRun) {
+  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  FakeTransport t(m, 2);
+  t.lose_at_[3] = 0;
+  t.lose_at_[4] = 1;
+  Solver solver(m, true);
+  RunResult r = RunMaster(&m, Opts(), &solver, nullptr, &t, nullptr, nullptr);
+  EXPECT_EQ(r.status, RunStatus::kNoWorkers);
+  EXPECT_EQ(r.why, "every worker was lost");
+  EXPECT_FALSE(r.fell_back);
+  EXPECT_GT(r.shots, 0);
+}
+
+// The in-process transport says that it computes inside Poll: the
+// scheduler then selects one patch at a time (no pipeline), in the
+// sequential algorithm's order, and reports no workers.
+TEST(Scheduler, ComputingInPollMeansOnePatchAtATime) {
+  Scene s = Lights();
+  Mesh m = MakeMesh(s, OnePatchPerFace());
+  InProcessTransport in(m, 32, false, 1);
+  EXPECT_TRUE(in.Caps().computes_in_poll);
+  FakeTransport fake(m, 1);
+  EXPECT_FALSE(fake.Caps().computes_in_poll);
+  Solver solver(m, true);
+  RunOptions o = Opts();
+  o.log_every = 1;
+  std::vector<int> workers;
+  RunResult r = RunMaster(&m, o, &solver, nullptr, &in,
+                          [&](const Sample& smp) { workers.push_back(smp.workers); }, nullptr);
+  EXPECT_EQ(r.status, RunStatus::kConverged);
+  ASSERT_FALSE(workers.empty());
+  EXPECT_EQ(*std::max_element(workers.begin(), workers.end()), 0);
 }
 
 TEST(Scheduler, NoWorkerAtAll) {
