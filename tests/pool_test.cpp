@@ -5,7 +5,6 @@
 // for what the other end sends, never for a fixed time.
 #include "pool.h"
 
-#include <poll.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -18,88 +17,19 @@
 #include <gtest/gtest.h>
 
 #include "net.h"
+#include "peer.h"
 #include "test_util.h"
 #include "worker.h"
 
 namespace {
 
 using proto::Msg;
+using test::Peer;
 
 class FakeClock : public Clock {
  public:
   double Now() override { return now; }
   double now = 100;  // not 0: the pool's epoch must be subtracted
-};
-
-// The test's end of the connection: blocking writes, reads that wait (up
-// to a generous bound, only reached when the test fails) for a whole frame.
-class Peer {
- public:
-  explicit Peer(int fd) : fd_(fd) {}
-  Peer(Peer&& o) : fd_(o.fd_), in_(std::move(o.in_)) { o.fd_ = -1; }
-  ~Peer() { Close(); }
-  void Close() {
-    if (fd_ >= 0) ::close(fd_);
-    fd_ = -1;
-  }
-  void Send(const std::string& bytes) {
-    size_t done = 0;
-    while (done < bytes.size()) {
-      const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
-      ASSERT_GT(n, 0);
-      done += size_t(n);
-    }
-  }
-  void SendHello(const proto::Hello& h = proto::Hello()) {
-    std::string f;
-    proto::EncodeHello(h, &f);
-    Send(f);
-  }
-  void SendReady(const Mesh& mesh) {
-    std::string f;
-    proto::EncodeReady({mesh.elems.size(), proto::MeshHash(mesh)}, &f);
-    Send(f);
-  }
-  void SendHeartbeat() {
-    std::string f;
-    proto::EncodeHeartbeat(&f);
-    Send(f);
-  }
-  // The next frame's type (its payload in *payload), or false at the end
-  // of the stream.
-  bool Next(Msg* type, std::string* payload = nullptr) {
-    std::string p, err;
-    for (;;) {
-      const proto::FrameReader::Result r = in_.Next(type, &p, &err);
-      if (r == proto::FrameReader::kBad) {
-        ADD_FAILURE() << err;
-        return false;
-      }
-      if (r == proto::FrameReader::kFrame) break;
-      pollfd pfd{fd_, POLLIN, 0};
-      if (::poll(&pfd, 1, 10000) != 1) {
-        ADD_FAILURE() << "nothing from the pool";
-        return false;
-      }
-      char buf[65536];
-      const ssize_t n = ::read(fd_, buf, sizeof buf);
-      if (n <= 0) return false;
-      in_.Append(buf, size_t(n));
-    }
-    if (payload) *payload = p;
-    return true;
-  }
-  // True when nothing at all is waiting to be read.
-  bool Quiet() {
-    if (in_.buffered() > 0) return false;
-    pollfd pfd{fd_, POLLIN, 0};
-    return ::poll(&pfd, 1, 0) == 0;
-  }
-  int fd() const { return fd_; }
-
- private:
-  int fd_;
-  proto::FrameReader in_;
 };
 
 class PoolTest : public ::testing::Test {
