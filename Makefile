@@ -16,9 +16,12 @@ NPROC    := $(shell nproc 2>/dev/null || echo 1)
 SAN      := -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := options.cpp app.cpp scene.cpp mesh.cpp hemicube.cpp subdivide.cpp master.cpp results.cpp image.cpp coding.cpp ffcodec.cpp protocol.cpp version.cpp transport.cpp worker.cpp sim.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp
+LIB_SRCS  := options.cpp app.cpp clock.cpp scene.cpp mesh.cpp hemicube.cpp subdivide.cpp solver.cpp scheduler.cpp results.cpp image.cpp coding.cpp ffcodec.cpp protocol.cpp version.cpp inprocess.cpp pool.cpp worker.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp
+# Only for the unit tests and the benchmarks, never in the program.
+SIM_SRCS  := sim.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)
 LIB_OBJS  := $(LIB_SRCS:%.cpp=$(B)/%.o)
+SIM_OBJS  := $(SIM_SRCS:%.cpp=$(B)/%.o)
 TEST_OBJS := $(TEST_SRCS:tests/%.cpp=$(B)/tests/%.o)
 
 all: $(PROG)
@@ -26,13 +29,13 @@ all: $(PROG)
 $(PROG): $(B)/radiosity.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
-$(B)/unit_tests: $(TEST_OBJS) $(LIB_OBJS)
+$(B)/unit_tests: $(TEST_OBJS) $(LIB_OBJS) $(SIM_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS) $(shell pkg-config --libs gtest_main)
 
 $(B)/radiosity-bench: $(B)/bench/bench.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
-$(B)/radiosity-parallel: $(B)/bench/parallel.o $(LIB_OBJS)
+$(B)/radiosity-parallel: $(B)/bench/parallel.o $(LIB_OBJS) $(SIM_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 $(B)/radiosity-waves: $(B)/bench/waves.o $(LIB_OBJS)

@@ -6,15 +6,17 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
+#include "clock.h"
 #include "connect.h"
 #include "errorchart.h"
 #include "hosts.h"
+#include "inprocess.h"
+#include "pool.h"
 #include "ssh.h"
 #include "worker.h"
 
@@ -144,9 +146,12 @@ void MasterRun::Build() {
 }
 
 void MasterRun::StartWorkers() {
+  // The master itself: alone with -j 0, and when every worker is lost.
+  run_.fallback = [this] {
+    return std::make_unique<InProcessTransport>(mesh_, run_.resolution, run_.rotate, run_.seed);
+  };
   if (opts_.workers == 0 && !opts_.Remote()) {
-    transport_ =
-        std::make_unique<InProcessTransport>(mesh_, run_.resolution, run_.rotate, run_.seed);
+    transport_ = run_.fallback();
     return;
   }
   std::string err;
@@ -207,7 +212,7 @@ void MasterRun::Resume() {
 }
 
 void MasterRun::SaveCheckpoint(const RunState& state) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const double t0 = MonotonicSeconds();
   size_t bytes = 0;
   std::string err;
   const Checkpoint c =
@@ -217,7 +222,7 @@ void MasterRun::SaveCheckpoint(const RunState& state) {
   else if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: checkpoint %s: %zu bytes at %ld shots in %.1f ms\n",
                  opts_.checkpoint_file.c_str(), bytes, solver_->shots(),
-                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+                 (MonotonicSeconds() - t0) * 1e3);
 }
 
 void MasterRun::OnSample(const Sample& s) {

@@ -49,7 +49,8 @@
 #include <string>
 #include <vector>
 
-#include "master.h"
+#include "scheduler.h"
+#include "solver.h"
 #include "mesh.h"
 #include "scene.h"
 #include "subdivide.h"

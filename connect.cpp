@@ -12,12 +12,12 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <chrono>
 #include <cstring>
 #include <thread>
 #include <vector>
 
 #include "check.h"
+#include "clock.h"
 #include "crypto.h"
 #include "source.h"
 
@@ -30,11 +30,6 @@ constexpr size_t kNonce = 32, kMac = 32;
 constexpr size_t kChallenge = sizeof kMagic + 1 + kNonce;  // master -> worker
 constexpr size_t kResponse = kNonce + kMac;                // worker -> master
 constexpr double kHandshake = 5;  // seconds for a connection to authenticate
-
-double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 std::string Nonce() {
   std::string n(kNonce, '\0');
@@ -71,7 +66,7 @@ void NoDelay(int fd) {
 // Blocking-style I/O on a non-blocking socket, up to a deadline.
 bool Wait(int fd, short events, double deadline) {
   for (;;) {
-    const double left = deadline - Now();
+    const double left = deadline - MonotonicSeconds();
     if (left <= 0) return false;
     pollfd p{fd, events, 0};
     const int n = ::poll(&p, 1, int(left * 1000) + 1);
@@ -143,7 +138,7 @@ void Listener::Accept(std::vector<Pending>* pending) {
                            SOCK_NONBLOCK | SOCK_CLOEXEC);
   if (fd < 0) return;
   NoDelay(fd);
-  Pending p{MasterHandshake(fd, secret_, Now() + kHandshake),
+  Pending p{MasterHandshake(fd, secret_, MonotonicSeconds() + kHandshake),
             AddressName(reinterpret_cast<sockaddr*>(&addr), len)};
   if (!p.handshake.Start()) {
     ::close(fd);
@@ -153,7 +148,7 @@ void Listener::Accept(std::vector<Pending>* pending) {
 }
 
 void Listener::Run() {
-  const double give_up = Now() + kConnectWait;
+  const double give_up = MonotonicSeconds() + kConnectWait;
   bool settled = false;
   std::vector<Pending> pending;
   for (;;) {
@@ -162,7 +157,7 @@ void Listener::Run() {
     ::poll(fds.data(), fds.size(), 200);
     if (fds[0].revents) break;
     if (fds[1].revents) Accept(&pending);
-    const double now = Now();
+    const double now = MonotonicSeconds();
     // fds[2 + i] belongs to pending[i] as it was before this round's accept.
     for (size_t i = fds.size() - 2; i-- > 0;) {
       Pending& p = pending[i];
@@ -229,7 +224,7 @@ MasterHandshake::Outcome MasterHandshake::Read(std::string* refusal) {
     *refusal = "does not know the secret";
     return kRefused;
   }
-  if (!SendAll(fd_, Mac(secret_, "radiosity master", nonce_, worker_nonce), Now() + kHandshake)) {
+  if (!SendAll(fd_, Mac(secret_, "radiosity master", nonce_, worker_nonce), MonotonicSeconds() + kHandshake)) {
     *refusal = "closed the connection while authenticating";
     return kRefused;
   }
@@ -243,7 +238,7 @@ bool MasterHandshake::Late(double now, std::string* refusal) const {
 }
 
 bool ProveToMaster(int fd, const std::string& secret, const std::string& where, std::string* err) {
-  const double deadline = Now() + 2 * kHandshake;
+  const double deadline = MonotonicSeconds() + 2 * kHandshake;
   std::string challenge, answer;
   if (!RecvAll(fd, kChallenge, deadline, &challenge) ||
       challenge.compare(0, sizeof kMagic, kMagic, sizeof kMagic) != 0 ||
@@ -363,7 +358,7 @@ std::unique_ptr<WorkerSource> Listen(const std::string& host, int port, const st
 }
 
 int ConnectBack(const std::string& host, int port, const std::string& secret, std::string* err) {
-  const double give_up = Now() + kConnectWait;
+  const double give_up = MonotonicSeconds() + kConnectWait;
   const std::string where = host + ":" + std::to_string(port);
   int fd = -1;
   // The master may not be listening yet: srun and mpirun start everyone
@@ -385,7 +380,7 @@ int ConnectBack(const std::string& host, int port, const std::string& secret, st
       socklen_t len = sizeof so_error;
       const bool ok =
           (::connect(fd, a->ai_addr, a->ai_addrlen) == 0 ||
-           (errno == EINPROGRESS && Wait(fd, POLLOUT, std::min(give_up, Now() + 5)) &&
+           (errno == EINPROGRESS && Wait(fd, POLLOUT, std::min(give_up, MonotonicSeconds() + 5)) &&
             ::getsockopt(fd, SOL_SOCKET, SO_ERROR, &so_error, &len) == 0 && so_error == 0));
       if (!ok) {
         *err = "cannot connect to " + where + ": " +
@@ -396,7 +391,7 @@ int ConnectBack(const std::string& host, int port, const std::string& secret, st
     }
     ::freeaddrinfo(res);
     if (fd >= 0) break;
-    if (Now() + 0.5 > give_up) return -1;
+    if (MonotonicSeconds() + 0.5 > give_up) return -1;
     ::usleep(500000);
   }
   NoDelay(fd);

@@ -14,7 +14,7 @@
 #include <memory>
 #include <string>
 
-#include "transport.h"
+#include "pool.h"
 
 // How long the master waits for the first worker to connect, and a
 // worker for the master to listen.

@@ -1,18 +1,13 @@
 #include "hemicube.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 
 #include "check.h"
+#include "clock.h"
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double Seconds(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
 
 // Outcode bits of one hemicube face for a point (a, b, d) in that face's
 // frame: outside |a| <= d, outside the b range, or in front of the near plane.
@@ -178,7 +173,7 @@ void Hemicube::Scan(int face, const float (*pt)[2], int n, float za, float zb,
 
 void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
                       std::vector<FormFactor>* out, ColumnStats* stats) {
-  auto t0 = Clock::now();
+  const double t0 = MonotonicSeconds();
   const Patch& sp = mesh.patches[shooter];
   const MeshFace& sf = mesh.faces[sp.face];
   const glm::dvec3 c = sp.center, n = sf.normal;
@@ -230,7 +225,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
     for (int i = mf.vbegin; i < mf.vend; ++i) transform(i);
     for (int i : mf.divide_verts) transform(i);
   }
-  auto t1 = Clock::now();
+  const double t1 = MonotonicSeconds();
 
   // Pass 2: every leaf element of those faces into the item buffers.
   std::fill(depth_.begin(), depth_.end(), 0.0f);
@@ -313,7 +308,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       }
     }
   }
-  auto t2 = Clock::now();
+  const double t2 = MonotonicSeconds();
 
   // Pass 3: sum delta form factors per element, a run of equal ids at a
   // time. Run ends are found as a bit mask per 64 pixels and visited by
@@ -343,13 +338,28 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       out->push_back({int32_t(id), float(acc_[id])});
       acc_[id] = 0;
     }
-  auto t3 = Clock::now();
+  const double t3 = MonotonicSeconds();
   if (stats) {
-    stats->transform_s += Seconds(t0, t1);
-    stats->raster_s += Seconds(t1, t2);
-    stats->readback_s += Seconds(t2, t3);
+    stats->transform_s += t1 - t0;
+    stats->raster_s += t2 - t1;
+    stats->readback_s += t3 - t2;
     stats->elements += elements;
     stats->covered += long(out->size());
     stats->pixels += long(npix);
   }
+}
+
+double ShotAngle(unsigned seed, int patch, int k) {
+  // splitmix64 of (seed, patch, k)
+  uint64_t z = (uint64_t(seed) << 40) ^ (uint64_t(uint32_t(patch)) << 16) ^ uint64_t(k);
+  z += 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return double(z >> 11) * 0x1.0p-53 * 2 * M_PI;
+}
+
+void ShotColumn(Hemicube* hemicube, const Mesh& mesh, int patch, int k, bool rotate,
+                unsigned seed, std::vector<FormFactor>* out, ColumnStats* stats) {
+  hemicube->Column(mesh, patch, rotate ? ShotAngle(seed, patch, k) : 0.0, out, stats);
 }

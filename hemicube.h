@@ -63,4 +63,14 @@ class Hemicube {
   std::vector<int> front_, leaves_;  // scratch, kept to avoid reallocation
 };
 
+// The hemicube angle for the k-th shot of patch p: a hash, so that any
+// process computing that column turns the hemicube alike.
+double ShotAngle(unsigned seed, int patch, int k);
+
+// The column of the k-th shot of `patch`, turned by ShotAngle when
+// `rotate`: what every process that computes columns (the master alone,
+// a worker, the simulation, the benchmarks) calls, so that they agree.
+void ShotColumn(Hemicube* hemicube, const Mesh& mesh, int patch, int k, bool rotate,
+                unsigned seed, std::vector<FormFactor>* out, ColumnStats* stats = nullptr);
+
 #endif

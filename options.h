@@ -8,11 +8,11 @@
 #include <vector>
 
 #include "hosts.h"
-#include "master.h"
 #include "mesh.h"
+#include "pool.h"
+#include "scheduler.h"
 #include "ssh.h"
 #include "subdivide.h"
-#include "transport.h"
 
 // The text of --help (stdout) and of a command line without one scene
 // (stderr).

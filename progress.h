@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "master.h"
+#include "scheduler.h"
 
 // One point of the unshot fraction against run time.
 struct UnshotPoint {

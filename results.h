@@ -10,7 +10,7 @@
 #include <glm/glm.hpp>
 
 #include "image.h"
-#include "master.h"
+#include "scheduler.h"
 #include "mesh.h"
 #include "scene.h"
 

@@ -4,11 +4,11 @@
 #include <cmath>
 
 #include "check.h"
-#include "master.h"
+#include "clock.h"
 
 SimTransport::SimTransport(const Mesh& mesh, const SimOptions& opts)
     : mesh_(mesh), opts_(opts), hemicube_(opts.resolution), workers_(opts.workers),
-      mark_(ThreadCpuSeconds()), wall_mark_(WallNow()) {
+      mark_(ThreadCpuSeconds()), wall_mark_(MonotonicSeconds()) {
   CHECK(opts_.workers >= 1 && opts_.host_cores >= 0 && opts_.latency_s >= 0);
   std::string frame;
   proto::EncodeHello(proto::Hello(), &frame);
@@ -45,7 +45,7 @@ int SimTransport::Starting() const {
 
 double SimTransport::Now() {
   if (opts_.master_cost_s >= 0) return now_;
-  return now_ + WallNow() - wall_mark_;
+  return now_ + MonotonicSeconds() - wall_mark_;
 }
 
 void SimTransport::Schedule(double t, Event ev) {
@@ -120,8 +120,7 @@ void SimTransport::Start(int w) {
   wk.todo.pop_front();
   const bool fixed = opts_.column_cost_s >= 0;
   const double t0 = ThreadCpuSeconds();
-  hemicube_.Column(mesh_, a.patch, opts_.rotate ? ShotAngle(opts_.seed, a.patch, a.k) : 0.0,
-                   &scratch_.ff);
+  ShotColumn(&hemicube_, mesh_, a.patch, a.k, opts_.rotate, opts_.seed, &scratch_.ff);
   scratch_.compute_s = (fixed ? opts_.column_cost_s : ThreadCpuSeconds() - t0) * wk.factor;
   wk.frame.clear();
   proto::EncodeColumn(scratch_, &wk.frame);
@@ -225,7 +224,7 @@ void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
   if (inbox_.empty()) Advance(nullptr, now_ + timeout, true);
   // From here on it is the master's work again: decoding what arrived.
   mark_ = ThreadCpuSeconds();
-  wall_mark_ = WallNow();
+  wall_mark_ = MonotonicSeconds();
   for (Event& ev : inbox_) {
     Worker& wk = workers_[ev.worker];
     switch (ev.kind) {

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "transport.h"
+#include "pool.h"
 
 class ThreadedSource : public WorkerSource {
  public:

@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -17,15 +16,11 @@
 #include <thread>
 
 #include "check.h"
+#include "clock.h"
 #include "crypto.h"
 #include "source.h"
 
 namespace {
-
-double Seconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 // The last non-empty line of what a remote process wrote on stderr, short
 // enough for a one-line message.
@@ -438,22 +433,22 @@ void SshLauncher::Run(size_t i) {
     std::vector<std::string> notes;  // for -v
     std::string error;               // a warning: the host, or some of its slots, failed
   } r;
-  const double t0 = Seconds();
+  const double t0 = MonotonicSeconds();
   std::shared_ptr<Session> session;
   std::string path = h.cmd;
   if (h.cmd.empty() && !self_err_.empty()) {
     r.error = self_err_;
   } else if (Connect(h, &session, &r.error)) {
     char line[200];
-    std::snprintf(line, sizeof line, "connected in %.2f s", Seconds() - t0);
+    std::snprintf(line, sizeof line, "connected in %.2f s", MonotonicSeconds() - t0);
     r.notes.push_back(line);
     const int timeout_ms = int(1000 * opts_.timeout_s);
     bool sent = false;
-    const double t1 = Seconds();
+    const double t1 = MonotonicSeconds();
     if (h.cmd.empty() && !stop_ &&
         Upload(session->get(), self_, timeout_ms, &sent, &path, &r.error)) {
       std::snprintf(line, sizeof line, "%s %s (%.1f MB) in %.2f s", sent ? "copied" : "reusing",
-                    path.c_str(), self_.bytes.size() / 1e6, Seconds() - t1);
+                    path.c_str(), self_.bytes.size() / 1e6, MonotonicSeconds() - t1);
       r.notes.push_back(line);
     }
     // The uploaded path is quoted; cmd= is the user's, for the login

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "hosts.h"
-#include "transport.h"
+#include "pool.h"
 
 struct SshOptions {
   // Record the key of a host not yet in known_hosts instead of refusing

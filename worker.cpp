@@ -12,24 +12,18 @@
 #include <poll.h>
 #include <unistd.h>
 
+#include "clock.h"
 #include "exit_status.h"
 #include "hemicube.h"
-#include "master.h"
 #include "mesh.h"
 #include "protocol.h"
-#include "transport.h"
 
 namespace {
-
-double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 // Frames to the master, from the main thread and the heartbeat thread.
 class Sender {
  public:
-  explicit Sender(int fd) : fd_(fd), last_(Now()) {}
+  explicit Sender(int fd) : fd_(fd), last_(MonotonicSeconds()) {}
   bool Send(const std::string& frame) {
     std::lock_guard<std::mutex> lock(mu_);
     size_t done = 0;
@@ -39,7 +33,7 @@ class Sender {
       if (n <= 0) return false;
       done += size_t(n);
     }
-    last_ = Now();
+    last_ = MonotonicSeconds();
     return true;
   }
   double last() {
@@ -74,7 +68,7 @@ class Heartbeat {
     std::unique_lock<std::mutex> lock(mu_);
     const auto poll = std::chrono::duration<double>(period_ / 4);
     while (!cv_.wait_for(lock, poll, [this] { return stop_; })) {
-      if (Now() - out_->last() < period_) continue;
+      if (MonotonicSeconds() - out_->last() < period_) continue;
       std::string frame;
       proto::EncodeHeartbeat(&frame);
       if (!out_->Send(frame)) return;
@@ -124,14 +118,14 @@ class Worker {
 
 Worker::Got Worker::Read(double timeout, proto::Msg* type, std::string* payload,
                          std::string* err) {
-  const double until = Now() + timeout;
+  const double until = MonotonicSeconds() + timeout;
   for (;;) {
     switch (in_.Next(type, payload, err)) {
       case proto::FrameReader::kFrame: return kFrame;
       case proto::FrameReader::kBad: return kBad;
       case proto::FrameReader::kNeedMore: break;
     }
-    const double left = until - Now();
+    const double left = until - MonotonicSeconds();
     pollfd p{in_fd_, POLLIN, 0};
     int n = ::poll(&p, 1, left <= 0 ? 0 : int(left * 1000) + 1);
     if (n < 0 && errno != EINTR) { *err = std::string("poll: ") + std::strerror(errno); return kBad; }
@@ -157,7 +151,7 @@ bool Worker::Handle(proto::Msg type, const std::string& payload, int* status,
           why = "patch " + std::to_string(a.patch) + " out of range";
           break;
         }
-        todo_.push_back({a, Now()});
+        todo_.push_back({a, MonotonicSeconds()});
       }
       if (!why.empty()) break;
       return true;
@@ -219,7 +213,7 @@ int Worker::Run(std::string* err) {
 
   Hemicube hemicube(setup.resolution);
   Heartbeat heartbeat(&out_, setup.heartbeat_s);
-  double heard = Now();
+  double heard = MonotonicSeconds();
   for (;;) {
     // Take in everything that has arrived; wait only when idle.
     for (;;) {
@@ -229,10 +223,10 @@ int Worker::Run(std::string* err) {
       if (got == kBad) return Fail(why, err);
       if (got == kTimeout) {
         if (!todo_.empty()) break;
-        if (Now() - heard > kMasterTimeout) { *err = "the master is silent"; return kExitFailure; }
+        if (MonotonicSeconds() - heard > kMasterTimeout) { *err = "the master is silent"; return kExitFailure; }
         continue;
       }
-      heard = Now();
+      heard = MonotonicSeconds();
       int status = kExitOk;
       if (!Handle(type, payload, &status, err)) return status;
     }
@@ -240,11 +234,10 @@ int Worker::Run(std::string* err) {
     proto::Column col;
     col.patch = a.patch;
     col.k = a.k;
-    col.wait_s = Now() - todo_.front().received;
+    col.wait_s = MonotonicSeconds() - todo_.front().received;
     todo_.pop_front();
     const double t0 = ThreadCpuSeconds();
-    hemicube.Column(mesh_, a.patch, setup.rotate ? ShotAngle(setup.seed, a.patch, a.k) : 0.0,
-                    &col.ff);
+    ShotColumn(&hemicube, mesh_, a.patch, a.k, setup.rotate, setup.seed, &col.ff);
     col.compute_s = ThreadCpuSeconds() - t0;
     frame.clear();
     proto::EncodeColumn(col, &frame);

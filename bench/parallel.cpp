@@ -40,12 +40,14 @@
 
 #include "check.h"
 #include "hemicube.h"
-#include "master.h"
 #include "mesh.h"
+#include "pool.h"
 #include "protocol.h"
 #include "results.h"
 #include "scene.h"
+#include "scheduler.h"
 #include "sim.h"
+#include "solver.h"
 #include "svg.h"
 #include "transport.h"
 
@@ -222,7 +224,7 @@ class Replayer {
     proto::Column c;
     c.patch = a.patch;
     c.k = a.k;
-    hemicube_.Column(s_.mesh, a.patch, ShotAngle(1, a.patch, a.k), &c.ff);
+    ShotColumn(&hemicube_, s_.mesh, a.patch, a.k, true, 1, &c.ff);
     std::string frame, payload, err;
     proto::EncodeColumn(c, &frame);
     proto::FrameReader reader;

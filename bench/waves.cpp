@@ -12,17 +12,18 @@
 //              many elements as the adaptive run ends with
 // The error is sampled every patches/20 shots; the time spent measuring it
 // is left out of the time axis.
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <vector>
 
-#include "master.h"
+#include "clock.h"
 #include "mesh.h"
 #include "results.h"
 #include "scene.h"
+#include "scheduler.h"
+#include "solver.h"
 #include "subdivide.h"
 
 namespace {
@@ -53,11 +54,11 @@ Curve Run(const Scene& scene, int epp, bool subdivide, const Mesh& ref,
   Curve c;
   double measuring = 0;  // seconds spent in the callback so far
   c.result = RunSequential(&mesh, o, &solver, subdivide ? &sub : nullptr, [&](const Sample& s) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const double t0 = MonotonicSeconds();
     double rms, rel;
     FieldError(mesh, solver.radiosity(), ref, ref_b, &rms, &rel);
     c.points.push_back({s.seconds - measuring, s.unshot, rel, s.shots, s.elements, s.wave});
-    measuring += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    measuring += MonotonicSeconds() - t0;
   });
   c.result.seconds -= measuring;
   c.elements = mesh.LeafCount();

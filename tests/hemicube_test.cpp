@@ -4,7 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include "master.h"
 #include "test_util.h"
 
 namespace {
@@ -132,6 +131,36 @@ TEST(Hemicube, ColumnIsSortedAndPositive) {
     if (i) {
       EXPECT_LT(col[i - 1].elem, col[i].elem);
     }
+  }
+}
+
+// The one column function every process calls: turned by the shot's hash
+// angle when rotating, not at all otherwise; the hash depends on seed,
+// patch and k, so that a patch's shots turn differently.
+TEST(Hemicube, ShotColumnTurnsByTheShotsAngle) {
+  Scene s = Box(2.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  Hemicube h(64), g(64);
+  std::vector<FormFactor> a, b;
+  auto same = [](const std::vector<FormFactor>& x, const std::vector<FormFactor>& y) {
+    if (x.size() != y.size()) return false;
+    for (size_t i = 0; i < x.size(); ++i)
+      if (x[i].elem != y[i].elem || x[i].f != y[i].f) return false;
+    return true;
+  };
+  ShotColumn(&h, m, 3, 2, true, 7, &a);
+  g.Column(m, 3, ShotAngle(7, 3, 2), &b);
+  EXPECT_TRUE(same(a, b));
+  ShotColumn(&h, m, 3, 2, false, 7, &a);
+  g.Column(m, 3, 0.0, &b);
+  EXPECT_TRUE(same(a, b));
+  EXPECT_NE(ShotAngle(7, 3, 2), ShotAngle(7, 3, 3));
+  EXPECT_NE(ShotAngle(7, 3, 2), ShotAngle(8, 3, 2));
+  EXPECT_NE(ShotAngle(7, 3, 2), ShotAngle(7, 4, 2));
+  for (int k = 0; k < 100; ++k) {
+    const double angle = ShotAngle(1, 5, k);
+    EXPECT_GE(angle, 0.0);
+    EXPECT_LT(angle, 2 * M_PI);
   }
 }
 

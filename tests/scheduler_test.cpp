@@ -3,14 +3,15 @@
 // hemicube columns so that runs converge to real answers.
 #include <algorithm>
 #include <map>
+#include <memory>
 #include <set>
 
 #include <gtest/gtest.h>
 
-#include "master.h"
+#include "inprocess.h"
 #include "results.h"
+#include "scheduler.h"
 #include "test_util.h"
-#include "transport.h"
 
 namespace {
 
@@ -196,17 +197,88 @@ TEST(Scheduler, LateCopyOfAColumnIsNotShotTwice) {
   EXPECT_EQ(r.columns, r.shots);
 }
 
+// A lit box and two fake workers, both lost early in the run.
+struct BothLost {
+  BothLost() { t.lose_at_ = {{3, 0}, {4, 1}}; }
+  Mesh m = MakeMesh(Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)}));
+  FakeTransport t{m, 2};
+  Solver solver{m, true};
+};
+
 TEST(Scheduler, MasterTakesOverWhenAllWorkersAreLost) {
-  Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
-  Mesh m = MakeMesh(s);
-  FakeTransport t(m, 2);
-  t.lose_at_[3] = 0;
-  t.lose_at_[4] = 1;
-  Solver solver(m, true);
-  RunResult r = RunMaster(&m, Opts(), &solver, nullptr, &t, nullptr, nullptr);
+  BothLost x;
+  RunOptions o = Opts();
+  o.fallback = [&] { return std::make_unique<InProcessTransport>(x.m, 32, false, 1); };
+  RunResult r = RunMaster(&x.m, o, &x.solver, nullptr, &x.t, nullptr, nullptr);
   EXPECT_EQ(r.status, RunStatus::kConverged);
   EXPECT_TRUE(r.fell_back);
-  EXPECT_LT(solver.UnshotFraction(), 1e-3);
+  EXPECT_LT(x.solver.UnshotFraction(), 1e-3);
+}
+
+// The fallback is the caller's: made once, when the last worker is lost,
+// and from then on the only transport the scheduler drives.
+TEST(Scheduler, TheInjectedFallbackIsWhatTakesOver) {
+  // Counts its assignments where the test can read them: the scheduler
+  // owns the fallback and deletes it when the run ends.
+  struct Counting : FakeTransport {
+    Counting(const Mesh& m, long* n) : FakeTransport(m, 1), n_(n) {}
+    void Assign(int w, const proto::Assignment& a) override {
+      ++*n_;
+      FakeTransport::Assign(w, a);
+    }
+    long* n_;
+  };
+  BothLost x;
+  int calls = 0;
+  long assigned = 0;
+  RunOptions o = Opts();
+  o.fallback = [&] {
+    ++calls;
+    return std::make_unique<Counting>(x.m, &assigned);
+  };
+  std::vector<std::string> notes;
+  RunResult r = RunMaster(&x.m, o, &x.solver, nullptr, &x.t, nullptr,
+                          [&](const std::string& line, bool) { notes.push_back(line); });
+  ASSERT_EQ(calls, 1);
+  EXPECT_EQ(r.status, RunStatus::kConverged) << r.why;
+  EXPECT_TRUE(r.fell_back);
+  EXPECT_EQ(r.lost, 2);
+  EXPECT_EQ(r.joined, 3);  // the fallback's worker joined like any other
+  EXPECT_GT(assigned, 0);
+  EXPECT_NE(std::find(notes.begin(), notes.end(),
+                      "no workers left: the master computes the form factors itself"),
+            notes.end());
+}
+
+// Without a fallback, losing every worker ends the run.
+TEST(Scheduler, WithoutAFallbackLosingEveryWorkerEndsTheRun) {
+  BothLost x;
+  RunResult r = RunMaster(&x.m, Opts(), &x.solver, nullptr, &x.t, nullptr, nullptr);
+  EXPECT_EQ(r.status, RunStatus::kNoWorkers);
+  EXPECT_EQ(r.why, "every worker was lost");
+  EXPECT_FALSE(r.fell_back);
+  EXPECT_GT(r.shots, 0);
+}
+
+// The in-process transport says that it computes inside Poll: the
+// scheduler then selects one patch at a time (no pipeline), in the
+// sequential algorithm's order, and reports no workers.
+TEST(Scheduler, ComputingInPollMeansOnePatchAtATime) {
+  Scene s = Lights();
+  Mesh m = MakeMesh(s, OnePatchPerFace());
+  InProcessTransport in(m, 32, false, 1);
+  EXPECT_TRUE(in.Caps().computes_in_poll);
+  FakeTransport fake(m, 1);
+  EXPECT_FALSE(fake.Caps().computes_in_poll);
+  Solver solver(m, true);
+  RunOptions o = Opts();
+  o.log_every = 1;
+  std::vector<int> workers;
+  RunResult r = RunMaster(&m, o, &solver, nullptr, &in,
+                          [&](const Sample& smp) { workers.push_back(smp.workers); }, nullptr);
+  EXPECT_EQ(r.status, RunStatus::kConverged);
+  ASSERT_FALSE(workers.empty());
+  EXPECT_EQ(*std::max_element(workers.begin(), workers.end()), 0);
 }
 
 TEST(Scheduler, NoWorkerAtAll) {

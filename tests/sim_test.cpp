@@ -2,10 +2,13 @@
 // virtual times are exact: who computes what, when it arrives, what the
 // wire carries. (How well measured costs predict real runs is the
 // benchmark's business: bench/parallel.cpp.)
+#include <memory>
+
 #include <gtest/gtest.h>
 
-#include "master.h"
+#include "inprocess.h"
 #include "results.h"
+#include "scheduler.h"
 #include "sim.h"
 #include "test_util.h"
 
@@ -280,7 +283,9 @@ TEST(Sim, EveryWorkerLostMeansTheMasterComputes) {
   SimOptions o = Fixed(2);
   o.crashes = {{0, 0.05}, {1, 0.05}};
   SimTransport t(m, o);
-  RunResult r = Simulate(m, Shots(50), &t);
+  RunOptions ro = Shots(50);
+  ro.fallback = [&] { return std::make_unique<InProcessTransport>(m, 32, false, 1); };
+  RunResult r = Simulate(m, ro, &t);
   EXPECT_TRUE(r.fell_back);
   EXPECT_EQ(r.shots, 50);
 }

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "hemicube.h"
-#include "master.h"
+#include "scheduler.h"
 #include "results.h"
 #include "test_util.h"
 

@@ -1,10 +1,11 @@
-#include "master.h"
+#include "solver.h"
 
 #include <cmath>
 
 #include <gtest/gtest.h>
 
 #include "results.h"
+#include "scheduler.h"
 #include "test_util.h"
 
 namespace {

@@ -1,10 +1,8 @@
-#include "transport.h"
+#include "pool.h"
 
 #include <cerrno>
-#include <chrono>
 #include <csignal>
 #include <cstring>
-#include <ctime>
 
 #include <fcntl.h>
 #include <poll.h>
@@ -14,7 +12,6 @@
 
 #include "check.h"
 #include "exit_status.h"
-#include "master.h"
 
 namespace {
 
@@ -77,17 +74,6 @@ std::string DescribeExit(int status) {
   return "exited with status " + std::to_string(status);
 }
 
-double WallNow() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-double ThreadCpuSeconds() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
-
 std::string SelfExe() {
   char buf[4096];
   ssize_t n = ::readlink("/proc/self/exe", buf, sizeof buf - 1);
@@ -136,45 +122,10 @@ std::unique_ptr<Conn> SocketConn(int fd) {
   return std::make_unique<LocalConn>(fd, -1);
 }
 
-// ---------------------------------------------------------------------------
-
-InProcessTransport::InProcessTransport(const Mesh& mesh, int resolution, bool rotate,
-                                       unsigned seed)
-    : mesh_(mesh), hemicube_(resolution), rotate_(rotate), seed_(seed) {}
-
-void InProcessTransport::Assign(int w, const proto::Assignment& a) {
-  CHECK(w == 0);
-  todo_.push_back(a);
-}
-
-void InProcessTransport::Poll(double, std::vector<WorkerEvent>* events) {
-  if (!joined_) {
-    joined_ = true;
-    events->push_back({WorkerEvent::kJoined, 0, {}, ""});
-    return;
-  }
-  if (todo_.empty()) return;
-  const proto::Assignment a = todo_.front();
-  todo_.erase(todo_.begin());
-  WorkerEvent ev{WorkerEvent::kColumn, 0, {}, ""};
-  ev.column.patch = a.patch;
-  ev.column.k = a.k;
-  const double t0 = WallNow();
-  hemicube_.Column(mesh_, a.patch, rotate_ ? ShotAngle(seed_, a.patch, a.k) : 0.0,
-                   &ev.column.ff, &stats_);
-  ev.column.compute_s = WallNow() - t0;
-  events->push_back(std::move(ev));
-}
-
-double InProcessTransport::Now() { return WallNow(); }
-
-// ---------------------------------------------------------------------------
-
 WorkerPool::WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh,
-                       const PoolOptions& opts)
+                       const PoolOptions& opts, Clock* clock)
     : mesh_(mesh), base_elements_(mesh.elems.size()), mesh_hash_(MeshHash(mesh)),
-      opts_(opts),
-      epoch_(WallNow()) {
+      opts_(opts), clock_(clock), epoch_(clock->Now()) {
   proto::EncodeHello(proto::Hello(), &scene_frame_);
   proto::SceneSetup told = setup;  // the workers' heartbeats: ours
   told.heartbeat_s = opts.heartbeat_s;
@@ -183,7 +134,7 @@ WorkerPool::WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh,
 
 WorkerPool::~WorkerPool() { Shutdown(); }
 
-double WorkerPool::Now() { return WallNow() - epoch_; }
+double WorkerPool::Now() { return clock_->Now() - epoch_; }
 
 void WorkerPool::Add(std::unique_ptr<Conn> conn, const std::string& name) {
   Worker w;

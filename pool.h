@@ -1,0 +1,141 @@
+// The local pool: worker processes behind byte streams (Conn), started
+// here (SpawnLocal), connected back or over ssh (a WorkerSource), driven by
+// one poll(2) loop that speaks the protocol of doc/protocol.txt with
+// heartbeats both ways and deadlines.
+#ifndef RADIOSITY_POOL_H
+#define RADIOSITY_POOL_H
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <sys/types.h>
+#include <vector>
+
+#include "clock.h"
+#include "mesh.h"
+#include "protocol.h"
+#include "transport.h"
+
+// A byte stream to one worker process: a socket or pipe pair, or an ssh
+// channel. Non-blocking: Read/Write return -1 with errno EAGAIN when they
+// would block, 0 from Read at end of stream.
+class Conn {
+ public:
+  virtual ~Conn() = default;
+  virtual int fd() const = 0;  // to poll; several Conns may share one (ssh)
+  // The poll(2) events to wait for, asked before every poll: POLLIN, and
+  // POLLOUT when `writing` (bytes wait to be written). An ssh channel may
+  // push its session's pending output here and ask for POLLOUT on its own
+  // account, or not at all while its window is shut.
+  virtual short Events(bool writing);
+  // True when Read would return at once although the fd may not be
+  // readable: bytes or the end of the stream are buffered in this process
+  // (an ssh channel whose packets came in while a sibling channel read).
+  virtual bool Buffered() { return false; }
+  virtual long Read(char* buf, size_t n) = 0;
+  virtual long Write(const char* buf, size_t n) = 0;
+  // Ends the stream and the process behind it; returns how it ended
+  // ("exited with status 3", "killed by signal 9"), or "" if unknown.
+  virtual std::string Close(bool kill) = 0;
+};
+
+// How a worker process ended with this exit status, as Close() says it.
+std::string DescribeExit(int status);
+
+// Starts `argv` (this binary with --worker, or a --worker-cmd) with a
+// socketpair on its stdin and stdout.
+std::unique_ptr<Conn> SpawnLocal(const std::vector<std::string>& argv, pid_t* pid,
+                                 std::string* err);
+
+// A worker on the other end of a connected socket, started by someone
+// else (connect-back): closing it only closes the socket.
+std::unique_ptr<Conn> SocketConn(int fd);
+
+// Path of the running executable (to start local workers from).
+std::string SelfExe();
+
+struct PoolOptions {
+  double heartbeat_s = 1.0;  // send a heartbeat after this much silence
+  double timeout_s = 10.0;   // drop a worker silent for this long
+  double hello_s = 30.0;     // deadline for hello + mesh build
+};
+
+class WorkerPool;
+
+// Brings workers to a pool while it runs: hosts being set up over ssh,
+// workers connecting back. Its work happens on threads of its own or in
+// Take(), never blocking the pool's poll loop for long.
+class WorkerSource {
+ public:
+  virtual ~WorkerSource() = default;
+  virtual int fd() const = 0;  // readable when Take() has something to do
+  // Adds what has arrived to the pool (WorkerPool::Add).
+  virtual void Take(WorkerPool* pool) = 0;
+  // Workers that may still come and are worth waiting for before the
+  // master concludes that it has none (hosts still being set up).
+  virtual int Expected() const = 0;
+  // No more workers: stop the threads, close the sockets.
+  virtual void Stop() = 0;
+};
+
+// Workers behind Conns, driven by poll(2) with non-blocking I/O: the
+// protocol of doc/protocol.txt, heartbeats both ways and deadlines.
+class WorkerPool : public Transport {
+ public:
+  // Deadlines and heartbeats go by `clock` (tests drive it).
+  WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh, const PoolOptions& opts,
+             Clock* clock = MonotonicClock());
+  ~WorkerPool() override;
+  // The scene frame is larger than the protocol allows (a scene of some
+  // millions of faces): workers cannot take it.
+  bool SceneTooLarge() const { return scene_frame_.size() > proto::kMaxFrame; }
+  // Takes a new worker; the hello and the scene are sent at once.
+  void Add(std::unique_ptr<Conn> conn, const std::string& name);
+  // Polls `source` along with the workers from now on.
+  void AddSource(std::unique_ptr<WorkerSource> source);
+
+  int Workers() const override { return int(workers_.size()); }
+  int Starting() const override;
+  std::string Name(int w) const override { return workers_[w].name; }
+  void Assign(int w, const proto::Assignment& a) override;
+  void Divide(const std::vector<int32_t>& elems) override;
+  void Poll(double timeout, std::vector<WorkerEvent>* events) override;
+  double Now() override;
+  uint64_t BytesSent() const override { return sent_; }
+  uint64_t BytesReceived() const override { return received_; }
+  void Shutdown() override;
+
+ private:
+  enum class State { kHello, kReady, kJoined, kLost };
+  struct Worker {
+    std::string name;
+    std::unique_ptr<Conn> conn;
+    State state = State::kHello;
+    proto::FrameReader in;
+    std::string out;        // encoded frames not yet written
+    size_t out_pos = 0;
+    double last_heard = 0, last_sent = 0, started = 0;
+  };
+  // ended: the worker closed its end (so it is exiting: wait for its
+  // status); otherwise it is killed.
+  void Lose(int w, const std::string& why, std::vector<WorkerEvent>* events,
+            bool ended = false);
+  void Flush(int w, std::vector<WorkerEvent>* events);
+  void Receive(int w, std::vector<WorkerEvent>* events);
+  bool Handle(int w, proto::Msg type, const std::string& payload,
+              std::vector<WorkerEvent>* events, std::string* why);
+  void Queue(int w, double now);
+
+  const Mesh& mesh_;
+  std::string scene_frame_;  // encoded once, sent to every worker
+  uint64_t base_elements_, mesh_hash_;  // of the mesh as BuildMesh made it
+  std::vector<int32_t> edits_;          // every Divide so far, in order
+  PoolOptions opts_;
+  Clock* clock_;
+  std::vector<Worker> workers_;
+  std::vector<std::unique_ptr<WorkerSource>> sources_;
+  uint64_t sent_ = 0, received_ = 0;
+  double epoch_;
+};
+
+#endif

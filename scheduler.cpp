@@ -1,0 +1,517 @@
+#include "scheduler.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <memory>
+
+#include "clock.h"
+#include "inprocess.h"
+
+namespace {
+
+// Subdivision between two shots: a division pass if one is due after
+// `shots_in_wave` shots of this wave; the ids it divided, in order,
+// replace *edits (what workers must apply alike). Returns true when the
+// wave is over.
+bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wave,
+            std::vector<int32_t>* edits) {
+  edits->clear();
+  if (!subdivider->Due(shots_in_wave)) return false;
+  const double t0 = ThreadCpuSeconds();
+  *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->Ambient(), shots_in_wave);
+  for (int32_t e : *edits) Divide(mesh, e);
+  solver->Divided(*edits);
+  subdivider->CountTime(ThreadCpuSeconds() - t0);
+  return subdivider->WaveOver();
+}
+
+// A worker as the scheduler keeps it (paper §4.1): the patches sent and
+// not yet answered, and the queue prepared for it. A patch in either is
+// owned by this worker and no other.
+struct Slot {
+  bool alive = false;
+  struct Sent {
+    proto::Assignment a;
+    double at;
+  };
+  std::deque<Sent> sent;
+  std::deque<int> prepared;
+  int depth = 2;          // sent and unanswered, at most
+  int high = 3, low = 2;  // watermarks on Queued()
+  long columns = 0;
+  int waiting = 0;        // its columns received and not yet shot
+  size_t Owned() const { return sent.size() + prepared.size(); }
+  // What the watermarks count: its columns waiting to be shot too, so
+  // that a master slower than its workers stops feeding them. Otherwise
+  // columns pile up, shot in arrival order (ever lower priority), and the
+  // master, decoding more than it shoots, falls further behind: 15
+  // simulated workers on the room at R 64 once received 1175 columns for
+  // 500 shots at 108 us a shot instead of 30.
+  size_t Queued() const { return Owned() + size_t(waiting); }
+};
+
+// The master's parts are timed with the monotonic clock: the thread's CPU
+// clock is a system call (8 us on a loaded virtual machine), dearer than
+// the work it would time, so it is read once per turn of the loop. The
+// wall time of a turn that was not CPU time was spent blocked, in Poll
+// waiting for workers (or preempted): counted as waiting, up to the wall
+// time of the Poll; the rest of the Poll is receiving.
+class TurnTimer {
+ public:
+  TurnTimer() : wall_(MonotonicSeconds()), cpu_(ThreadCpuSeconds()) {}
+  void Polled(double seconds) { poll_s_ = seconds; }
+  void EndTurn(RunResult* r) {
+    const double wall = MonotonicSeconds(), cpu = ThreadCpuSeconds();
+    const double blocked = std::clamp((wall - wall_) - (cpu - cpu_), 0.0, poll_s_);
+    r->wait_s += blocked;
+    r->receive_s += poll_s_ - blocked;
+    wall_ = wall;
+    cpu_ = cpu;
+    poll_s_ = 0;
+  }
+
+ private:
+  double wall_, cpu_, poll_s_ = 0;
+};
+
+class Scheduler {
+ public:
+  Scheduler(Mesh* mesh, const RunOptions& opts, Solver* solver, Subdivider* sub, Transport* t,
+            const std::function<void(const Sample&)>& sample,
+            const std::function<void(const std::string&, bool)>& note)
+      : mesh_(*mesh), mutable_mesh_(mesh), opts_(opts), solver_(solver), sub_(sub), t_(t),
+        first_(t), sample_(sample), note_(note), taken_(mesh->patches.size(), 0) {
+    if (const RunState* r = opts.resume) {
+      wave_ = r->wave;
+      wave_start_ = r->wave_start;
+      best_ = r->best;
+      best_at_ = r->best_at;
+      before_ = r->seconds;
+      r_.columns = r->columns;
+      pending_.assign(r->pending.begin(), r->pending.end());
+    }
+  }
+  RunResult Run();
+
+ private:
+  // The steps of Run(), in the order of one turn of its loop.
+  void Begin();
+  void EndConvergedWave();
+  bool Stop();
+  void Receive();
+  bool FallBack();
+  void Distribute();
+  bool Exhausted();
+  void ShootNext();
+  void Subdivide();
+  void CheckpointIfDue();
+  RunResult Finish();
+
+  double Elapsed() { return before_ + t_->Now() - base_; }
+  void Note(const std::string& line, bool warning) {
+    if (note_) note_(line, warning);
+  }
+  bool Alive() const {
+    for (const Slot& s : slots_)
+      if (s.alive) return true;
+    return false;
+  }
+  bool Pipelined() const { return !t_->Caps().computes_in_poll; }
+  void Sizes(Slot* s, int workers) const;
+  void Handle(WorkerEvent& ev);
+  void Release(Slot* s);
+  void NextWave();
+  int NextPatch();
+  RunState State();
+  void Checkpoint() {
+    if (opts_.checkpoint) opts_.checkpoint(State());
+    last_checkpoint_ = t_->Now();
+  }
+  void Emit() {
+    if (!sample_) return;
+    int alive = 0;
+    if (Pipelined())
+      for (const Slot& s : slots_) alive += s.alive;
+    sample_({Elapsed(), solver_->shots(), wave_, mesh_.LeafCount(), unshot_, alive});
+  }
+
+  const Mesh& mesh_;
+  Mesh* mutable_mesh_;  // changed only by Subdivide()
+  const RunOptions& opts_;
+  Solver* solver_;
+  Subdivider* sub_;     // null: no subdivision, one wave
+  Transport* t_;
+  Transport* first_;    // the transport given (t_ may become the fallback)
+  std::unique_ptr<Transport> fallback_;
+  const std::function<void(const Sample&)>& sample_;
+  const std::function<void(const std::string&, bool)>& note_;
+  std::vector<char> taken_;           // owned by a worker, or its column waits
+  std::vector<Slot> slots_;
+  struct Ready {
+    proto::Column column;
+    int from;  // the slot it came from (-1: that slot is gone)
+  };
+  std::deque<Ready> ready_;  // columns received, to be shot in order
+  std::vector<WorkerEvent> events_;   // of the last Poll
+  TurnTimer timer_;
+  long log_every_ = 1;                // shots between samples
+  double unshot_ = 0;                 // the solver's UnshotFraction() as of the last step
+  double base_ = 0, before_ = 0;      // clock: Elapsed() survives a fallback
+  double best_ = HUGE_VAL;            // stall detection, per wave
+  long best_at_ = 0;
+  int wave_ = 1;
+  long wave_start_ = 0;               // shots before this wave
+  std::vector<int32_t> edits_;
+  std::deque<int> pending_;           // RunState::pending of a resumed run
+  double last_checkpoint_ = 0;        // on t_'s clock
+  RunResult r_;
+};
+
+// The next patch to hand out: first those a resumed run's checkpoint had
+// selected and not shot, then the one with the most power to shoot.
+int Scheduler::NextPatch() {
+  while (!pending_.empty()) {
+    const int p = pending_.front();
+    pending_.pop_front();
+    if (p >= 0 && size_t(p) < taken_.size() && !taken_[p]) return p;
+  }
+  return solver_->Select(&taken_);
+}
+
+RunState Scheduler::State() {
+  RunState s;
+  s.wave = wave_;
+  s.wave_start = wave_start_;
+  s.best = best_;
+  s.best_at = best_at_;
+  s.seconds = Elapsed();
+  s.columns = r_.columns;
+  // Columns waiting are shot first; then the workers' patches, sent before
+  // prepared, taken in turns as their columns would come back.
+  for (const Ready& r : ready_) s.pending.push_back(r.column.patch);
+  for (size_t i = 0;; ++i) {
+    bool any = false;
+    for (const Slot& w : slots_) {
+      if (!w.alive || i >= w.Owned()) continue;
+      any = true;
+      s.pending.push_back(i < w.sent.size() ? w.sent[i].a.patch : w.prepared[i - w.sent.size()]);
+    }
+    if (!any) break;
+  }
+  for (int p : pending_) s.pending.push_back(p);
+  return s;
+}
+
+// Queue sizes (paper §4.1: "3-10 patches according to network size").
+// depth covers the measured round trip: while one column travels back and
+// the next assignment travels out, the worker computes the ones it holds.
+// high adds enough prepared patches to refill that pipeline twice, more
+// with many workers (the master then takes longer to come round to each).
+void Scheduler::Sizes(Slot* s, int workers) const {
+  if (!Pipelined()) {  // select right before computing: sequential order
+    s->depth = s->high = s->low = 1;
+    return;
+  }
+  if (opts_.queue > 0) {
+    s->high = opts_.queue;
+    s->depth = std::min(s->depth, s->high);
+  } else {
+    s->high = std::clamp(2 * s->depth + workers / 32, 3, 10);
+  }
+  s->low = std::max(1, (s->high + 1) / 2);
+}
+
+void Scheduler::Release(Slot* s) {
+  for (const Slot::Sent& x : s->sent) taken_[x.a.patch] = 0;
+  for (int p : s->prepared) taken_[p] = 0;
+  s->sent.clear();
+  s->prepared.clear();
+}
+
+void Scheduler::Handle(WorkerEvent& ev) {
+  if (ev.worker >= int(slots_.size())) slots_.resize(ev.worker + 1);
+  Slot& s = slots_[ev.worker];
+  switch (ev.kind) {
+    case WorkerEvent::kJoined:
+      s.alive = true;
+      ++r_.joined;
+      Sizes(&s, t_->Workers());
+      if (Pipelined()) Note(t_->Name(ev.worker) + ": joined", false);
+      return;
+    case WorkerEvent::kLost: {
+      if (!s.alive) {  // never joined: nothing of it to give back
+        Note(t_->Name(ev.worker) + ": " + ev.why, true);
+        return;
+      }
+      s.alive = false;
+      ++r_.lost;
+      const size_t n = s.Owned();
+      Release(&s);
+      Note(t_->Name(ev.worker) + ": lost (" + ev.why + "); its " + std::to_string(n) +
+           " patches go to the others", true);
+      return;
+    }
+    case WorkerEvent::kColumn: {
+      const proto::Column& c = ev.column;
+      auto it = std::find_if(s.sent.begin(), s.sent.end(), [&](const Slot::Sent& x) {
+        return x.a.patch == c.patch && x.a.k == c.k;
+      });
+      // Only an outstanding assignment is shot: never the same patch twice.
+      if (!s.alive || it == s.sent.end()) {
+        ++r_.stale;
+        return;
+      }
+      const double net = t_->Now() - it->at - c.compute_s - c.wait_s;
+      if (Pipelined() && c.compute_s > 0 && s.columns > 0) {
+        const int need = 1 + int(std::ceil(std::max(0.0, net) / c.compute_s));
+        s.depth = std::clamp(need, 2, 10);
+        Sizes(&s, t_->Workers());
+      }
+      ++s.columns;
+      ++s.waiting;
+      s.sent.erase(it);
+      r_.worker_s += c.compute_s;
+      ready_.push_back({std::move(ev.column), ev.worker});
+      return;
+    }
+  }
+}
+
+// Cyclic fill (paper §4.1): when any queue is under its low mark, go round
+// the workers not yet at their high mark, one patch each per turn, always
+// the patch with the most power to shoot, so that the first lights of a
+// run go to different workers. Then send what each pipeline has room for.
+void Scheduler::Distribute() {
+  const double t0 = MonotonicSeconds();
+  bool low = false;
+  for (const Slot& s : slots_) low |= s.alive && s.Queued() < size_t(s.low);
+  for (bool more = low; more;) {
+    more = false;
+    for (Slot& s : slots_) {
+      if (!s.alive || s.Queued() >= size_t(s.high)) continue;
+      const int p = NextPatch();
+      if (p < 0) break;  // nothing left with power to shoot: send what is prepared
+      taken_[p] = 1;
+      s.prepared.push_back(p);
+      more = true;
+    }
+  }
+  for (size_t w = 0; w < slots_.size(); ++w) {
+    Slot& s = slots_[w];
+    while (s.alive && !s.prepared.empty() && s.sent.size() < size_t(s.depth)) {
+      const int p = s.prepared.front();
+      s.prepared.pop_front();
+      const proto::Assignment a{p, solver_->TimesShot(p)};
+      s.sent.push_back({a, t_->Now()});
+      t_->Assign(int(w), a);
+    }
+  }
+  r_.distribute_s += MonotonicSeconds() - t0;
+}
+
+bool Scheduler::Stop() {
+  const double unshot = unshot_;
+  const long shots = solver_->shots();
+  if (solver_->Dark()) {
+    r_.status = RunStatus::kConverged;
+    r_.why = "the scene emits no light";
+  } else if (unshot < opts_.epsilon) {
+    r_.status = RunStatus::kConverged;
+  } else if (opts_.stop && *opts_.stop) {
+    r_.status = RunStatus::kStopped;
+  } else if (opts_.max_shots > 0 && shots >= opts_.max_shots) {
+    r_.status = RunStatus::kLimit;
+    r_.why = "shot limit reached";
+  } else if (opts_.max_seconds > 0 && Elapsed() >= opts_.max_seconds) {
+    r_.status = RunStatus::kLimit;
+    r_.why = "time limit reached";
+  } else if (!std::isfinite(unshot) || unshot > 1e12) {
+    r_.status = RunStatus::kNotConverged;
+    r_.why = "unshot energy grows without bound (does the scene reflect all light?)";
+  } else {
+    // Not converging: the unshot fraction has not fallen by 1% for this
+    // many shots (20 sweeps over the patches). Progress that slow (ρ → 1
+    // without overshooting) or none at all (ρ = 1) would not finish in
+    // useful time.
+    const long stall = std::max(1000L, 20 * long(mesh_.patches.size()));
+    if (unshot < best_ * 0.99) {
+      best_ = unshot;
+      best_at_ = shots;
+      return false;
+    }
+    if (shots - best_at_ <= stall) return false;
+    r_.status = RunStatus::kNotConverged;
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "unshot energy still %.3g of emitted and not falling for %ld shots "
+                  "(reflectance too close to 1?)",
+                  unshot, stall);
+    r_.why = buf;
+  }
+  return true;
+}
+
+// A division pass (paper §4.3) when one is due, only while every worker's
+// queue holds at least its low mark and no column waits to be shot, so
+// that the workers stay busy while the master divides. The edits go to
+// every worker in the order they were made.
+void Scheduler::Subdivide() {
+  if (!sub_ || !ready_.empty()) return;
+  for (const Slot& s : slots_)
+    if (s.alive && Pipelined() && s.Queued() < size_t(s.low)) return;
+  const double t0 = MonotonicSeconds();
+  const bool over = Refine(mutable_mesh_, solver_, sub_, solver_->shots() - wave_start_, &edits_);
+  if (!edits_.empty()) t_->Divide(edits_);
+  r_.subdivide_s += MonotonicSeconds() - t0;
+  if (over) NextWave();
+  unshot_ = solver_->UnshotFraction();
+}
+
+// The end of a wave (paper §4.4): a picture of it, then the radiosity is
+// thrown away and shooting starts again from the emitters on the finer
+// mesh. Columns in flight are still shot: they are columns of the same
+// geometry.
+void Scheduler::NextWave() {
+  if (opts_.wave_end) opts_.wave_end(wave_);
+  solver_->NewWave();
+  sub_->StartWave(mesh_);
+  ++wave_;
+  wave_start_ = best_at_ = solver_->shots();
+  best_ = HUGE_VAL;
+  unshot_ = solver_->UnshotFraction();
+  Emit();
+}
+
+void Scheduler::Begin() {
+  timer_ = TurnTimer();
+  base_ = t_->Now();
+  log_every_ =
+      opts_.log_every > 0 ? opts_.log_every : std::max(1L, long(mesh_.patches.size()) / 100);
+  unshot_ = solver_->UnshotFraction();
+  if (!opts_.resume) Emit();
+  last_checkpoint_ = t_->Now();
+}
+
+// A wave whose light is shot but whose subdivision is not done goes on as
+// a new wave on the finer mesh.
+void Scheduler::EndConvergedWave() {
+  if (unshot_ < opts_.epsilon && sub_ && sub_->WaveOver(true)) NextWave();
+}
+
+// Waits for workers only when there is nothing to shoot.
+void Scheduler::Receive() {
+  const double t0 = MonotonicSeconds();
+  events_.clear();
+  t_->Poll(ready_.empty() ? 0.25 : 0.0, &events_);
+  timer_.Polled(MonotonicSeconds() - t0);
+  for (WorkerEvent& ev : events_) Handle(ev);
+}
+
+// No worker is alive or on its way and no column waits: the fallback
+// computes the columns from here on, on a clock of its own that Elapsed()
+// continues. False when the run ends instead.
+bool Scheduler::FallBack() {
+  if (r_.joined == 0 || !opts_.fallback) {
+    r_.status = RunStatus::kNoWorkers;
+    r_.why = r_.joined == 0 ? "no worker could be started" : "every worker was lost";
+    return false;
+  }
+  Note("no workers left: the master computes the form factors itself", true);
+  r_.fell_back = true;
+  before_ = Elapsed();
+  fallback_ = opts_.fallback();
+  t_ = fallback_.get();
+  base_ = last_checkpoint_ = t_->Now();
+  slots_.clear();
+  for (Ready& r : ready_) r.from = -1;
+  return true;
+}
+
+// Nothing waits to be shot: true (the run has converged) when nothing is
+// owned either and workers are alive, so nothing has power left to shoot.
+bool Scheduler::Exhausted() {
+  bool owned = false;
+  for (const Slot& s : slots_) owned |= s.Owned() > 0;
+  if (owned || !Alive()) return false;
+  r_.status = RunStatus::kConverged;
+  return true;
+}
+
+// Shoots the oldest column received, and samples the run every log_every_
+// shots.
+void Scheduler::ShootNext() {
+  const double t0 = MonotonicSeconds();
+  const proto::Column c = std::move(ready_.front().column);
+  Slot* from = ready_.front().from >= 0 ? &slots_[size_t(ready_.front().from)] : nullptr;
+  ready_.pop_front();
+  if (from) --from->waiting;
+  solver_->Shoot(c.patch, c.ff);
+  taken_[c.patch] = 0;
+  ++r_.columns;
+  unshot_ = solver_->UnshotFraction();
+  r_.shoot_s += MonotonicSeconds() - t0;
+  // The shot made room in its worker's queue: refill it before Poll
+  // blocks, as the arrival of the column no longer did.
+  if (from && from->alive && from->Queued() < size_t(from->low)) Distribute();
+  if (solver_->shots() % log_every_ == 0) Emit();
+}
+
+void Scheduler::CheckpointIfDue() {
+  if (opts_.checkpoint_every > 0 && t_->Now() - last_checkpoint_ >= opts_.checkpoint_every)
+    Checkpoint();
+}
+
+RunResult Scheduler::Finish() {
+  Checkpoint();  // before the last sample, which a resumed run then writes
+  if (solver_->shots() % log_every_ != 0) Emit();  // the last state, once
+  r_.shots = solver_->shots();
+  r_.seconds = Elapsed();
+  r_.unshot = unshot_;
+  r_.bytes_sent = first_->BytesSent();
+  r_.bytes_received = first_->BytesReceived();
+  r_.waves = wave_;
+  if (sub_) r_.passes = sub_->passes();
+  return r_;
+}
+
+RunResult Scheduler::Run() {
+  Begin();
+  for (;;) {
+    EndConvergedWave();
+    timer_.EndTurn(&r_);
+    if (Stop()) break;
+    Receive();
+    if (!Alive() && t_->Starting() == 0 && ready_.empty()) {
+      if (!FallBack()) break;
+      continue;
+    }
+    // Sending work comes before shooting, so that workers never starve.
+    Distribute();
+    if (ready_.empty()) {
+      if (Exhausted()) break;
+      continue;
+    }
+    ShootNext();
+    Subdivide();
+    CheckpointIfDue();
+  }
+  return Finish();
+}
+
+}  // namespace
+
+RunResult RunMaster(Mesh* mesh, const RunOptions& opts, Solver* solver, Subdivider* subdivider,
+                    Transport* transport, const std::function<void(const Sample&)>& sample,
+                    const std::function<void(const std::string&, bool)>& note) {
+  Scheduler s(mesh, opts, solver, subdivider, transport, sample, note);
+  return s.Run();
+}
+
+RunResult RunSequential(Mesh* mesh, const RunOptions& opts, Solver* solver,
+                        Subdivider* subdivider,
+                        const std::function<void(const Sample&)>& sample) {
+  InProcessTransport t(*mesh, opts.resolution, opts.rotate, opts.seed);
+  return RunMaster(mesh, opts, solver, subdivider, &t, sample, nullptr);
+}

@@ -1,0 +1,386 @@
+// The worker pool against a peer on the other end of a socketpair: the
+// test itself speaking frames (proto:: encoders), or a real RunWorker on a
+// thread or in a forked child. The pool's clock is the test's, so that
+// deadlines and heartbeats come when the test says: no sleeps. Reads wait
+// for what the other end sends, never for a fixed time.
+#include "pool.h"
+
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "protocol.h"
+#include "peer.h"
+#include "test_util.h"
+#include "worker.h"
+
+namespace {
+
+using proto::Msg;
+using test::Peer;
+
+class FakeClock : public Clock {
+ public:
+  double Now() override { return now; }
+  double now = 100;  // not 0: the pool's epoch must be subtracted
+};
+
+class PoolTest : public ::testing::Test {
+ protected:
+  PoolTest()
+      : mesh_(MakeMesh(Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)}))),
+        setup_{Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)}), MeshOptions(), 16, 0, 1},
+        pool_(setup_, mesh_, opts_, &clock_) {}
+
+  // A worker whose other end is a Peer; the pool's next Poll (here) sends
+  // it the hello and the scene.
+  Peer Connect(const std::string& name = "w") {
+    int sv[2];
+    EXPECT_EQ(::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv), 0);
+    pool_.Add(SocketConn(sv[0]), name);
+    std::vector<WorkerEvent> ev;
+    pool_.Poll(0, &ev);
+    EXPECT_TRUE(ev.empty());
+    return Peer(sv[1]);
+  }
+  // Reads the pool's hello and scene.
+  void ReadSetup(Peer* p) {
+    Msg type;
+    std::string payload, err;
+    ASSERT_TRUE(p->Next(&type, &payload));
+    ASSERT_EQ(type, Msg::kHello);
+    proto::Hello h;
+    ASSERT_TRUE(proto::DecodeHello(payload, &h, &err)) << err;
+    EXPECT_EQ(h.build, proto::BuildId());
+    ASSERT_TRUE(p->Next(&type, &payload));
+    ASSERT_EQ(type, Msg::kScene);
+    proto::SceneSetup s;
+    ASSERT_TRUE(proto::DecodeScene(payload, &s, &err)) << err;
+    EXPECT_EQ(s.resolution, 16);
+  }
+  // Polls (without waiting, the bytes are there already) until an event
+  // comes; none within a few polls: an empty vector.
+  std::vector<WorkerEvent> Events() {
+    std::vector<WorkerEvent> ev;
+    for (int i = 0; i < 4 && ev.empty(); ++i) pool_.Poll(0, &ev);
+    return ev;
+  }
+  // A Peer that has joined.
+  Peer Joined() {
+    Peer p = Connect();
+    ReadSetup(&p);
+    p.SendHello();
+    p.SendReady(mesh_);
+    std::vector<WorkerEvent> ev = Events();
+    EXPECT_EQ(ev.size(), 1u);
+    if (!ev.empty()) {
+      EXPECT_EQ(ev[0].kind, WorkerEvent::kJoined);
+    }
+    return p;
+  }
+  // The one event of the next polls: a loss, and why.
+  std::string LostWhy() {
+    std::vector<WorkerEvent> ev = Events();
+    if (ev.size() != 1 || ev[0].kind != WorkerEvent::kLost) {
+      ADD_FAILURE() << ev.size() << " events, not one loss";
+      return "";
+    }
+    return ev[0].why;
+  }
+
+  FakeClock clock_;
+  PoolOptions opts_;
+  Mesh mesh_;
+  proto::SceneSetup setup_;
+  WorkerPool pool_;
+};
+
+bool Has(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+TEST_F(PoolTest, JoinsAfterHelloAndReadyThenTradesWorkForColumns) {
+  Peer p = Connect("worker 0");
+  EXPECT_EQ(pool_.Starting(), 1);
+  ReadSetup(&p);
+  p.SendHello();
+  EXPECT_TRUE(Events().empty());  // a hello alone is not a join
+  p.SendReady(mesh_);
+  std::vector<WorkerEvent> ev = Events();
+  ASSERT_EQ(ev.size(), 1u);
+  EXPECT_EQ(ev[0].kind, WorkerEvent::kJoined);
+  EXPECT_EQ(ev[0].worker, 0);
+  EXPECT_EQ(pool_.Starting(), 0);
+  EXPECT_EQ(pool_.Name(0), "worker 0");
+
+  pool_.Assign(0, {3, 2});
+  ev.clear();
+  pool_.Poll(0, &ev);  // writes the work frame
+  Msg type;
+  std::string payload, err;
+  ASSERT_TRUE(p.Next(&type, &payload));
+  ASSERT_EQ(type, Msg::kWork);
+  std::vector<proto::Assignment> work;
+  ASSERT_TRUE(proto::DecodeWork(payload, &work, &err)) << err;
+  ASSERT_EQ(work.size(), 1u);
+  EXPECT_EQ(work[0].patch, 3);
+  EXPECT_EQ(work[0].k, 2);
+
+  proto::Column c;
+  c.patch = 3;
+  c.k = 2;
+  c.ff = {{1, 0.25f}, {4, 0.5f}};
+  std::string frame;
+  proto::EncodeColumn(c, &frame);
+  p.Send(frame);
+  ev = Events();
+  ASSERT_EQ(ev.size(), 1u);
+  EXPECT_EQ(ev[0].kind, WorkerEvent::kColumn);
+  EXPECT_EQ(ev[0].column.patch, 3);
+  EXPECT_EQ(ev[0].column.k, 2);
+  ASSERT_EQ(ev[0].column.ff.size(), 2u);
+  EXPECT_EQ(ev[0].column.ff[1].elem, 4);
+  EXPECT_GT(pool_.BytesReceived(), frame.size());
+  EXPECT_GT(pool_.BytesSent(), 0u);
+}
+
+TEST_F(PoolTest, HelloDeadline) {
+  Peer p = Connect();
+  ReadSetup(&p);
+  clock_.now += opts_.hello_s - 0.5;
+  EXPECT_TRUE(Events().empty());
+  p.SendHello();  // a hello is not enough: the mesh must be built in time too
+  EXPECT_TRUE(Events().empty());
+  clock_.now += 1;
+  EXPECT_EQ(LostWhy(), "did not start within 30 s");
+  EXPECT_EQ(pool_.Starting(), 0);
+  Msg type;
+  EXPECT_FALSE(p.Next(&type));  // the pool closed its end
+}
+
+TEST_F(PoolTest, HeartbeatsAfterSilenceAndTimeoutWithout) {
+  Peer p = Joined();
+  EXPECT_TRUE(p.Quiet());
+  clock_.now += opts_.heartbeat_s / 2;
+  EXPECT_TRUE(Events().empty());
+  EXPECT_TRUE(p.Quiet());  // not silent long enough
+  clock_.now += opts_.heartbeat_s;
+  EXPECT_TRUE(Events().empty());
+  Msg type;
+  ASSERT_TRUE(p.Next(&type));
+  EXPECT_EQ(type, Msg::kHeartbeat);
+
+  // The worker's heartbeats keep it alive past the timeout.
+  for (int i = 0; i < 3; ++i) {
+    clock_.now += 0.6 * opts_.timeout_s;
+    p.SendHeartbeat();
+    EXPECT_TRUE(Events().empty()) << i;
+    while (!p.Quiet()) ASSERT_TRUE(p.Next(&type));  // the pool's own heartbeats
+  }
+  // Without them it is dropped.
+  clock_.now += opts_.timeout_s + 0.5;
+  EXPECT_EQ(LostWhy(), "silent for 10.5 s");
+}
+
+TEST_F(PoolTest, GarbageIsABadFrame) {
+  Peer p = Connect();
+  ReadSetup(&p);
+  p.Send("this is not a frame at all");
+  EXPECT_TRUE(Has(LostWhy(), "sent a bad frame: ")) << "garbage";
+}
+
+TEST_F(PoolTest, ATruncatedFrameWaitsThenTheCloseLosesTheWorker) {
+  Peer p = Connect();
+  ReadSetup(&p);
+  std::string f;
+  proto::EncodeHello(proto::Hello(), &f);
+  p.Send(f.substr(0, f.size() / 2));
+  EXPECT_TRUE(Events().empty());  // the rest may still come
+  p.Close();
+  EXPECT_EQ(LostWhy(), "closed the connection");
+}
+
+TEST_F(PoolTest, AGarbledPayloadIsNamed) {
+  Peer p = Connect();
+  ReadSetup(&p);
+  std::string f;
+  proto::EncodeHello(proto::Hello(), &f);
+  f.resize(f.size() - 1);
+  f[0] = char(f[0] - 1);  // the header's length, little-endian, one byte less
+  p.Send(f);
+  EXPECT_TRUE(Has(LostWhy(), "garbled hello: ")) << "truncated payload";
+}
+
+TEST_F(PoolTest, WrongProtocolVersion) {
+  Peer p = Connect();
+  ReadSetup(&p);
+  proto::Hello h;
+  h.version = proto::kVersion + 1;
+  p.SendHello(h);
+  const std::string why = LostWhy();
+  EXPECT_TRUE(Has(why, "speaks protocol version " + std::to_string(proto::kVersion + 1) +
+                           ", this master speaks " + std::to_string(proto::kVersion)))
+      << why;
+}
+
+TEST_F(PoolTest, AnotherBuild) {
+  Peer p = Connect();
+  ReadSetup(&p);
+  proto::Hello h;
+  h.build = "radiosity 0.0 (elsewhere)";
+  p.SendHello(h);
+  const std::string why = LostWhy();
+  EXPECT_TRUE(Has(why, "is another build ('radiosity 0.0 (elsewhere)'")) << why;
+}
+
+TEST_F(PoolTest, AnotherMesh) {
+  Peer p = Connect();
+  ReadSetup(&p);
+  p.SendHello();
+  std::string f;
+  proto::EncodeReady({mesh_.elems.size(), MeshHash(mesh_) ^ 1}, &f);
+  p.Send(f);
+  const std::string why = LostWhy();
+  EXPECT_TRUE(Has(why, "built a different mesh (" + std::to_string(mesh_.elems.size()) +
+                           " elements")) << why;
+}
+
+TEST_F(PoolTest, AColumnBeforeJoiningIsUnexpected) {
+  Peer p = Connect();
+  ReadSetup(&p);
+  p.SendHello();
+  proto::Column c;
+  std::string f;
+  proto::EncodeColumn(c, &f);
+  p.Send(f);
+  EXPECT_EQ(LostWhy(), "sent an unexpected column frame");
+}
+
+TEST_F(PoolTest, AColumnOutOfTheMeshIsRefused) {
+  Peer p = Joined();
+  proto::Column c;
+  c.patch = int32_t(mesh_.patches.size());
+  std::string f;
+  proto::EncodeColumn(c, &f);
+  p.Send(f);
+  EXPECT_EQ(LostWhy(), "sent a column out of the mesh's range");
+}
+
+TEST_F(PoolTest, AWorkersErrorIsPassedOn) {
+  Peer p = Connect();
+  ReadSetup(&p);
+  std::string f;
+  proto::EncodeError("cannot build the mesh", &f);
+  p.Send(f);
+  EXPECT_EQ(LostWhy(), "says: cannot build the mesh");
+}
+
+TEST_F(PoolTest, AWorkerThatClosesMidColumnIsLost) {
+  Peer p = Joined();
+  pool_.Assign(0, {0, 0});
+  std::vector<WorkerEvent> ev;
+  pool_.Poll(0, &ev);
+  Msg type;
+  ASSERT_TRUE(p.Next(&type));
+  ASSERT_EQ(type, Msg::kWork);
+  p.Close();  // as a worker that crashed while computing it
+  EXPECT_EQ(LostWhy(), "closed the connection");
+  // A lost worker gets nothing more, and Divide passes it by.
+  pool_.Divide({0});
+  EXPECT_TRUE(Events().empty());
+}
+
+TEST_F(PoolTest, LateJoinersGetEveryDivisionSoFar) {
+  pool_.Divide({0});
+  pool_.Divide({1, 2});
+  Peer p = Connect();
+  ReadSetup(&p);
+  Msg type;
+  std::string payload, err;
+  ASSERT_TRUE(p.Next(&type, &payload));
+  ASSERT_EQ(type, Msg::kDivide);
+  std::vector<int32_t> elems;
+  ASSERT_TRUE(proto::DecodeDivide(payload, &elems, &err)) << err;
+  EXPECT_EQ(elems, (std::vector<int32_t>{0, 1, 2}));
+}
+
+TEST_F(PoolTest, ShutdownSaysBye) {
+  Peer p = Joined();
+  pool_.Shutdown();
+  Msg type;
+  ASSERT_TRUE(p.Next(&type));
+  EXPECT_EQ(type, Msg::kBye);
+  EXPECT_FALSE(p.Next(&type));
+}
+
+// A real worker on a thread: it joins, computes the column the master
+// would and leaves on bye with status 0.
+TEST_F(PoolTest, ARealWorkerComputesTheColumn) {
+  int sv[2];
+  ASSERT_EQ(::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv), 0);
+  int status = -1;
+  std::string err;
+  std::thread worker([&] { status = RunWorker(sv[1], sv[1], &err); });
+  pool_.Add(SocketConn(sv[0]), "thread");
+  std::vector<WorkerEvent> ev;
+  while (ev.empty()) pool_.Poll(10, &ev);  // returns when the worker writes
+  ASSERT_EQ(ev[0].kind, WorkerEvent::kJoined) << ev[0].why;
+  pool_.Assign(0, {2, 1});
+  ev.clear();
+  while (ev.empty()) pool_.Poll(10, &ev);
+  ASSERT_EQ(ev[0].kind, WorkerEvent::kColumn) << ev[0].why;
+  EXPECT_EQ(ev[0].column.patch, 2);
+  EXPECT_EQ(ev[0].column.k, 1);
+  Hemicube h(16);
+  std::vector<FormFactor> want;
+  ShotColumn(&h, mesh_, 2, 1, false, 1, &want);
+  ASSERT_EQ(ev[0].column.ff.size(), want.size());
+  for (size_t i = 0; i < want.size(); ++i) EXPECT_EQ(ev[0].column.ff[i].elem, want[i].elem);
+  pool_.Shutdown();
+  worker.join();
+  ::close(sv[1]);
+  EXPECT_EQ(status, 0) << err;
+}
+
+// A real worker in a child process, killed with an assignment outstanding:
+// the pool reports it lost, whatever the child was doing.
+TEST_F(PoolTest, AKilledWorkerProcessIsLost) {
+  int sv[2];
+  ASSERT_EQ(::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv), 0);
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::close(sv[0]);
+    std::string err;
+    ::_exit(RunWorker(sv[1], sv[1], &err));
+  }
+  ::close(sv[1]);
+  pool_.Add(SocketConn(sv[0]), "child");
+  std::vector<WorkerEvent> ev;
+  while (ev.empty()) pool_.Poll(10, &ev);
+  ASSERT_EQ(ev[0].kind, WorkerEvent::kJoined) << ev[0].why;
+  pool_.Assign(0, {0, 0});
+  ev.clear();
+  pool_.Poll(0, &ev);  // the work goes out
+  ASSERT_EQ(::kill(pid, SIGKILL), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFSIGNALED(status));
+  // Its column may have come back before the kill; then the loss.
+  for (int i = 0; i < 100 && (ev.empty() || ev.back().kind != WorkerEvent::kLost); ++i)
+    pool_.Poll(10, &ev);
+  ASSERT_FALSE(ev.empty());
+  EXPECT_EQ(ev.back().kind, WorkerEvent::kLost);
+  // Killed with the work frame unread, its end resets the connection.
+  const std::string why = ev.back().why;
+  EXPECT_TRUE(why == "closed the connection" || Has(why, "cannot read: ")) << why;
+}
+
+}  // namespace

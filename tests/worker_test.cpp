@@ -1,0 +1,159 @@
+// RunWorker on a thread with the test as its master over a socketpair:
+// what it says and how it ends when the master speaks well or badly.
+#include "worker.h"
+
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "hemicube.h"
+#include "protocol.h"
+#include "peer.h"
+#include "test_util.h"
+
+namespace {
+
+using proto::Msg;
+using test::Peer;
+
+class WorkerTest : public ::testing::Test {
+ protected:
+  WorkerTest() : setup_{Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)}), MeshOptions(), 16, 0, 1} {
+    int sv[2];
+    EXPECT_EQ(::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv), 0);
+    fd_ = sv[1];
+    master_ = std::make_unique<Peer>(sv[0]);
+    thread_ = std::thread([this] { status_ = RunWorker(fd_, fd_, &err_); });
+  }
+  ~WorkerTest() override {
+    master_->Close();  // end of stream: a worker still running exits
+    End();
+  }
+  // Waits for the worker to return.
+  void End() {
+    if (thread_.joinable()) thread_.join();
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = -1;
+  }
+  Msg Next(std::string* payload = nullptr) {
+    Msg type = Msg::kBye;
+    EXPECT_TRUE(master_->Next(&type, payload));
+    return type;
+  }
+  // The worker's hello, the master's hello and scene, the worker's ready.
+  void Handshake() {
+    ASSERT_EQ(Next(), Msg::kHello);
+    std::string f;
+    proto::EncodeHello(proto::Hello(), &f);
+    proto::EncodeScene(setup_, &f);
+    master_->Send(f);
+    std::string payload, err;
+    ASSERT_EQ(Next(&payload), Msg::kReady);
+    proto::Ready r;
+    ASSERT_TRUE(proto::DecodeReady(payload, &r, &err)) << err;
+    const Mesh m = MakeMesh(setup_.scene);
+    EXPECT_EQ(r.elements, m.elems.size());
+    EXPECT_EQ(r.mesh_hash, MeshHash(m));
+  }
+  // The error frame the worker sent, and its return.
+  std::string Error() {
+    std::string payload, text, err;
+    EXPECT_EQ(Next(&payload), Msg::kError);
+    EXPECT_TRUE(proto::DecodeError(payload, &text, &err)) << err;
+    End();
+    EXPECT_EQ(status_, 1);
+    EXPECT_EQ(err_, text);
+    return text;
+  }
+
+  proto::SceneSetup setup_;
+  std::unique_ptr<Peer> master_;
+  int fd_ = -1;
+  int status_ = -1;
+  std::string err_;
+  std::thread thread_;
+};
+
+TEST_F(WorkerTest, ComputesColumnsInOrderAndLeavesOnBye) {
+  Handshake();
+  std::string f;
+  proto::EncodeWork({{1, 0}, {4, 3}}, &f);
+  master_->Send(f);
+  const Mesh m = MakeMesh(setup_.scene);
+  Hemicube h(16);
+  for (const proto::Assignment a : {proto::Assignment{1, 0}, proto::Assignment{4, 3}}) {
+    std::string payload, err;
+    Msg type = Next(&payload);
+    while (type == Msg::kHeartbeat) type = Next(&payload);
+    ASSERT_EQ(type, Msg::kColumn);
+    proto::Column c;
+    ASSERT_TRUE(proto::DecodeColumn(payload, &c, &err)) << err;
+    EXPECT_EQ(c.patch, a.patch);
+    EXPECT_EQ(c.k, a.k);
+    std::vector<FormFactor> want;
+    ShotColumn(&h, m, a.patch, a.k, false, 1, &want);
+    ASSERT_EQ(c.ff.size(), want.size());
+  }
+  f.clear();
+  proto::EncodeBye(&f);
+  master_->Send(f);
+  End();
+  EXPECT_EQ(status_, 0) << err_;
+}
+
+TEST_F(WorkerTest, EndOfStreamBeforeTheSceneIsAQuietExit) {
+  ASSERT_EQ(Next(), Msg::kHello);
+  master_->Close();
+  End();
+  EXPECT_EQ(status_, 0) << err_;
+}
+
+TEST_F(WorkerTest, RefusesAnotherProtocolVersion) {
+  ASSERT_EQ(Next(), Msg::kHello);
+  proto::Hello h;
+  h.version = proto::kVersion + 1;
+  h.build = "elsewhere";
+  std::string f;
+  proto::EncodeHello(h, &f);
+  master_->Send(f);
+  EXPECT_EQ(Error(), "this worker is '" + proto::BuildId() + "', the master 'elsewhere'");
+}
+
+TEST_F(WorkerTest, GarbageFromTheMasterIsAnError) {
+  ASSERT_EQ(Next(), Msg::kHello);
+  master_->Send("garbage, not a frame");
+  EXPECT_FALSE(Error().empty());
+}
+
+TEST_F(WorkerTest, WorkOutOfTheMeshIsAnError) {
+  Handshake();
+  std::string f;
+  proto::EncodeWork({{1 << 20, 0}}, &f);
+  master_->Send(f);
+  EXPECT_EQ(Error(), "patch 1048576 out of range");
+}
+
+TEST_F(WorkerTest, ADivisionOfNoLeafIsAnError) {
+  Handshake();
+  std::string f;
+  proto::EncodeDivide({0, 0}, &f);  // the second time 0 is divided already
+  master_->Send(f);
+  EXPECT_EQ(Error(), "cannot divide element 0");
+}
+
+TEST_F(WorkerTest, TheMastersErrorEndsIt) {
+  Handshake();
+  std::string f;
+  proto::EncodeError("stop", &f);
+  master_->Send(f);
+  End();
+  EXPECT_EQ(status_, 1);
+  EXPECT_EQ(err_, "master says: stop");
+}
+
+}  // namespace
