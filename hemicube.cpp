@@ -6,6 +6,7 @@
 
 #include "check.h"
 #include "clock.h"
+#include "hash.h"
 
 namespace {
 
@@ -350,12 +351,8 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
 }
 
 double ShotAngle(unsigned seed, int patch, int k) {
-  // splitmix64 of (seed, patch, k)
-  uint64_t z = (uint64_t(seed) << 40) ^ (uint64_t(uint32_t(patch)) << 16) ^ uint64_t(k);
-  z += 0x9E3779B97F4A7C15ull;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  z ^= z >> 31;
+  const uint64_t z =
+      SplitMix64((uint64_t(seed) << 40) ^ (uint64_t(uint32_t(patch)) << 16) ^ uint64_t(k));
   return double(z >> 11) * 0x1.0p-53 * 2 * M_PI;
 }
 
