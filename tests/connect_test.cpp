@@ -18,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include "crypto.h"
+#include "temp_dir.h"
 
 namespace {
 
@@ -228,15 +229,9 @@ TEST_F(WorkerSide, MasterWithoutTheSecret) {
 
 class SecretFile : public ::testing::Test {
  protected:
-  SecretFile() {
-    std::string tmpl = (std::filesystem::temp_directory_path() / "connect_test.XXXXXX").string();
-    if (!mkdtemp(tmpl.data())) std::abort();
-    dir_ = tmpl;
-  }
-  ~SecretFile() override { std::filesystem::remove_all(dir_); }
   // Writes `content` with exactly `mode`, whatever the umask.
   std::string Write(const std::string& content, mode_t mode) {
-    const std::string path = dir_ + "/secret";
+    const std::string path = dir_.path() + "/secret";
     const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
     EXPECT_GE(fd, 0);
     EXPECT_EQ(::write(fd, content.data(), content.size()), ssize_t(content.size()));
@@ -244,7 +239,7 @@ class SecretFile : public ::testing::Test {
     ::close(fd);
     return path;
   }
-  std::string dir_;
+  TempDir dir_;
 };
 
 TEST_F(SecretFile, PrivateFileRead) {
@@ -280,10 +275,10 @@ TEST_F(SecretFile, TooShort) {
 
 TEST_F(SecretFile, NotAFile) {
   std::string secret, err;
-  EXPECT_FALSE(ReadSecret(dir_, &secret, &err));
-  EXPECT_EQ(err, dir_ + ": not a regular file");
-  EXPECT_FALSE(ReadSecret(dir_ + "/missing", &secret, &err));
-  EXPECT_EQ(err, dir_ + "/missing: No such file or directory");
+  EXPECT_FALSE(ReadSecret(dir_.path(), &secret, &err));
+  EXPECT_EQ(err, dir_.path() + ": not a regular file");
+  EXPECT_FALSE(ReadSecret(dir_.path() + "/missing", &secret, &err));
+  EXPECT_EQ(err, dir_.path() + "/missing: No such file or directory");
 }
 
 }  // namespace

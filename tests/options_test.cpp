@@ -1,6 +1,5 @@
 #include "options.h"
 
-#include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -10,6 +9,10 @@
 #include <fstream>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
+
+#include "temp_dir.h"
 
 namespace {
 
@@ -39,24 +42,19 @@ Options Parses(std::vector<std::string> args) {
 class Files {
  public:
   Files() {
-    std::string tmpl = (std::filesystem::temp_directory_path() / "options_test.XXXXXX").string();
-    if (!mkdtemp(tmpl.data())) std::abort();
-    dir_ = tmpl;
-    secret_ = Write("secret", "0123456789abcdef0123456789abcdef\n");
+    secret_ = dir_.Write("secret", "0123456789abcdef0123456789abcdef\n");
     chmod(secret_.c_str(), 0600);
-    hosts_ = Write("hosts", "node1 slots=2\n");
+    hosts_ = dir_.Write("hosts", "node1 slots=2\n");
   }
-  ~Files() { std::filesystem::remove_all(dir_); }
   std::string Write(const std::string& name, const std::string& text) const {
-    const std::string path = dir_ + "/" + name;
-    std::ofstream(path) << text;
-    return path;
+    return dir_.Write(name, text);
   }
   const std::string& secret() const { return secret_; }
   const std::string& hosts() const { return hosts_; }
 
  private:
-  std::string dir_, secret_, hosts_;
+  TempDir dir_;
+  std::string secret_, hosts_;
 };
 
 TEST(Options, Defaults) {
