@@ -24,22 +24,19 @@ ARGS=(-r 128)
 
 run_ok "room, uninterrupted, -j 0" "$T/whole" -j 0 "${ARGS[@]}" "$ROOM" || finish
 
-# interrupted NAME SIGNAL ARGS...: the run in the background with
-# checkpoints every 0.3 s into $T/NAME.ck; SIGNAL sent to the master 1 s
-# after the first checkpoint is there. Sets RC (its exit status).
+# interrupted NAME SIGNAL ARGS...: the run (-v) in the background with
+# checkpoints every 0.3 s into $T/NAME.ck; SIGNAL sent to the master as
+# soon as it says it wrote a checkpoint past shot 0. Sets RC (its exit
+# status).
 interrupted() {
-  local name=$1 sig=$2 i; shift 2
-  mkdir -p "$T/$name"
-  "$RADIOSITY" -q -o "$T/$name" --checkpoint "$T/$name.ck" --checkpoint-every 0.3 "$@" \
-    >"$T/$name.out" 2>"$T/$name.err" &
-  local pid=$!
-  for i in $(seq 300); do [ -s "$T/$name.ck" ] && break; sleep 0.1; done
-  sleep 1
-  if ! kill -0 "$pid" 2>/dev/null; then
-    fail "$name: the run was still going 1 s after its first checkpoint (make it longer)"
+  local name=$1 sig=$2; shift 2
+  bg_run "$name" -v --checkpoint "$T/$name.ck" --checkpoint-every 0.3 "$@"
+  if ! wait_says "$name" "checkpoint $T/$name.ck: [0-9]* bytes at [1-9][0-9]* shots" ||
+     ! kill -0 "$PID" 2>/dev/null; then
+    fail "$name: the run was still going after its first checkpoint past shot 0 (make it longer)"
   fi
-  kill "-$sig" "$pid" 2>/dev/null
-  wait "$pid"
+  kill "-$sig" "$PID" 2>/dev/null
+  wait "$PID"
   RC=$?
   echo "# $name: signal $sig after the first checkpoint -> exit $RC"
 }
@@ -84,14 +81,7 @@ run_ok "SIGINT, resumed" "$T/int" -j 0 "${ARGS[@]}" --resume "$T/int.ck" "$ROOM"
 
 # --- kill -9 with workers ----------------------------------------------------
 interrupted par KILL -j 2 "${ARGS[@]}" "$ROOM"
-left=""
-for i in $(seq 50); do
-  left=$(pgrep -f -- "$RADIOSITY --worker")
-  [ -z "$left" ] && break
-  sleep 0.1
-done
-[ -z "$left" ] && pass "kill -9 of the master, -j 2: no worker left behind (within 5 s)" ||
-  fail "kill -9 of the master, -j 2: workers left behind: $(echo $left)"
+no_workers_left "kill -9 of the master, -j 2: no worker left behind (within 5 s)"
 run_ok "kill -9, -j 2, resumed with -j 2" "$T/par" -j 2 "${ARGS[@]}" --resume "$T/par.ck" "$ROOM" &&
   check_same "kill -9, -j 2, resumed: agrees with -j 0" "$T/par/result.csv" "$T/whole/result.csv" 5
 

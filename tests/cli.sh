@@ -97,13 +97,14 @@ timeout 60 "$RADIOSITY" -q -o "$T/file/sub" -s 5 "$CB" 2>"$T/unw.err"; rc=$?
   && pass "unwritable -o: exit 1 ($(head -1 "$T/unw.err"))" || fail "unwritable -o (exit $rc: $(head -1 "$T/unw.err"))"
 
 # SIGINT / SIGTERM: finish the shot in hand, write everything, exit 0.
+# Sent once the progress line shows shots: the handlers are in place and
+# the run is under way.
 for sig in INT TERM; do
   out=$T/sig$sig
-  "$RADIOSITY" -o "$out" -e 1e-12 "$SCENES/room.obj" 2>"$out.err" &
-  pid=$!
-  sleep 2
-  kill -s "$sig" "$pid"
-  wait "$pid"; rc=$?
+  bg_run "sig$sig" -e 1e-12 "$SCENES/room.obj"
+  wait_shots "sig$sig" 1
+  kill -s "$sig" "$PID"
+  wait "$PID"; rc=$?
   if [ "$rc" -eq 0 ] && grep -q "stopped on request" "$out.err" && [ -s "$out/result.csv" ] && [ -s "$out/final.png" ]; then
     pass "SIG$sig: exit 0, results written ($(tail -1 "$out.err"))"
   else
@@ -112,12 +113,14 @@ for sig in INT TERM; do
 done
 # A second signal leaves at once.
 # Two signals sent back to back can merge into one pending signal, so the
-# second comes 0.5 s later, while a large picture (seconds of work) is written.
-"$RADIOSITY" -q -o "$T/twice" -e 1e-12 --size 6000x6000 "$SCENES/room.obj" 2>/dev/null &
-pid=$!
-sleep 1
-kill -INT "$pid"; sleep 0.5; kill -INT "$pid"
-wait "$pid"; rc=$?
+# second comes once the first has stopped the run: result.csv is written,
+# and the large picture after it (seconds of work) is being made.
+bg_run twice -e 1e-12 --size 6000x6000 "$SCENES/room.obj"
+wait_shots twice 1
+kill -INT "$PID"
+wait_run 60 test -s "$T/twice/result.csv"
+kill -INT "$PID"
+wait "$PID"; rc=$?
 [ "$rc" -ne 0 ] && pass "second SIGINT ends at once (exit $rc)" || fail "second SIGINT (exit $rc, want non-zero)"
 
 finish

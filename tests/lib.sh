@@ -77,37 +77,60 @@ bg_run() {
 # workers_of PID: the master's local worker processes (its children).
 workers_of() { pgrep -P "$1"; }
 
-# wait_workers PID N: until the master has N children (at most 5 s).
-wait_workers() {
-  local i
-  for i in $(seq 50); do
-    [ "$(workers_of "$1" | wc -l)" -ge "$2" ] && return 0
+# wait_until SECS CMD...: until CMD succeeds, tried every 0.1 s for at most
+# SECS seconds. The bound only catches a program that never gets there.
+wait_until() {
+  local i n=$(($1 * 10)); shift
+  for ((i = 0; i < n; i++)); do
+    "$@" && return 0
     sleep 0.1
   done
   return 1
 }
 
+# wait_run SECS CMD...: wait_until CMD succeeds or the background run $PID
+# has ended (then CMD is asked once more: its last words count).
+wait_run() {
+  local secs=$1; shift
+  wait_until "$secs" _done_or_ended "$@"
+  "$@"
+}
+_done_or_ended() { "$@" || ! kill -0 "$PID" 2>/dev/null; }
+
+# no_workers: no worker process of $RADIOSITY is running.
+no_workers() { ! pgrep -f -- "$RADIOSITY --worker" >/dev/null; }
+
 # no_workers_left WHAT: a check that no worker process of $RADIOSITY is
-# left running.
+# left running (given 5 s to notice that their master is gone).
 no_workers_left() {
-  local left
-  left=$(pgrep -f -- "$RADIOSITY --worker" | wc -l)
-  if [ "$left" -eq 0 ]; then pass "$1"; else fail "$1 ($left worker processes left behind)"; fi
+  if wait_until 5 no_workers; then pass "$1"
+  else fail "$1 (worker processes left behind: $(pgrep -f -- "$RADIOSITY --worker" | tr '\n' ' '))"; fi
 }
 
 # says NAME TEXT: stderr of run NAME has TEXT (a grep pattern).
 says() { grep -q -- "$2" "$T/$1.err"; }
 
-# wait_says NAME TEXT: until says NAME TEXT, while $PID runs (at most 60 s).
-wait_says() {
-  local i
-  for i in $(seq 600); do
-    says "$1" "$2" && return 0
-    kill -0 "$PID" 2>/dev/null || return 1
-    sleep 0.1
-  done
-  return 1
+# says_times NAME TEXT N: stderr of run NAME has N lines with TEXT.
+says_times() { [ "$(grep -c -- "$2" "$T/$1.err")" -ge "$3" ]; }
+
+# shots NAME: the last shot count run NAME printed (its progress line, or
+# with -v its sample line); 0 before the first.
+shots() {
+  awk '/^radiosity: / { for (i = 2; i < NF; i++) if ($(i + 1) == "shots" && $i ~ /^[0-9]+$/) n = $i }
+       END { print n + 0 }' "$T/$1.err"
 }
+has_shots() { [ "$(shots "$1")" -ge "$2" ]; }
+
+# wait_says NAME TEXT: until says NAME TEXT, while $PID runs (at most 60 s).
+wait_says() { wait_run 60 says "$1" "$2"; }
+
+# wait_shots NAME N: until run NAME has printed N shots, while $PID runs
+# (at most 60 s).
+wait_shots() { wait_run 60 has_shots "$1" "$2"; }
+
+# wait_shooting NAME N: until N workers of run NAME joined and it shoots
+# (a first shot count printed): from here on a fault hits the run mid-way.
+wait_shooting() { wait_run 60 says_times "$1" ": joined$" "$2" && wait_shots "$1" 1; }
 
 # run_ok WHAT OUTDIR [ARGS...]: run_rad, and a check that it exited 0 and
 # wrote result.csv. Returns 1 (after the FAIL line) when it did not.

@@ -5,8 +5,9 @@
 #    face (maze); the analytic cases hold with -j 2;
 #  * kill -9 of one worker, then of every worker, mid-run: the run ends,
 #    the answer is the same, stderr says what happened;
-#  * SIGSTOP of a worker for 2 s does not stall the run; with --timeout 1
-#    the stopped worker is dropped and its patches are computed elsewhere;
+#  * SIGSTOP of a worker does not stall the run (the other worker's
+#    columns keep it shooting while it is stopped); with --timeout 1 the
+#    stopped worker is dropped and its patches are computed elsewhere;
 #  * a worker of another protocol version, and one that sends garbage, are
 #    refused with a message naming them, and the master goes on.
 #   RADIOSITY=/abs/path/radiosity bash tests/parallel.sh
@@ -63,8 +64,10 @@ run_ok "furnace rho 0.9, -j 2" "$T/f" -j 2 -e 1e-4 -r 64 "$T/f.obj" &&
 
 LONG=("${ARGS[@]}" "$MAZE")
 
+# Each fault below hits once both workers have joined and the master
+# shoots (wait_shooting), however slow the machine.
 bg_run kill1 -j 2 "${LONG[@]}"
-wait_workers "$PID" 2; sleep 0.7
+wait_shooting kill1 2
 victim=$(workers_of "$PID" | head -1)
 kill -9 "$victim"
 wait "$PID"; rc=$?
@@ -76,7 +79,7 @@ else
 fi
 
 bg_run killall -j 2 "${LONG[@]}"
-wait_workers "$PID" 2; sleep 0.7
+wait_shooting killall 2
 kill -9 $(workers_of "$PID")
 wait "$PID"; rc=$?
 if [ "$rc" -eq 0 ] && grep -q "no workers left" "$T/killall.err"; then
@@ -86,26 +89,38 @@ else
   fail "kill -9 of every worker (exit $rc; stderr: $(head -3 "$T/killall.err"))"
 fi
 
-# SIGSTOP for 2 s, under the 10 s timeout: the other worker keeps the run
-# going (log.csv rows advance while it is stopped), nothing is dropped.
-bg_run stop -j 2 --log-every 20 "${LONG[@]}"
-wait_workers "$PID" 2; sleep 0.5
+# SIGSTOP under the 10 s timeout: the other worker keeps the run going
+# (log.csv rows advance while it is stopped), nothing is dropped. The
+# worker stays stopped until the master has shot 100 more patches (5 rows
+# of 20; more than the 10 columns a worker's queue holds at most, so the
+# other worker computed them), or the wait gives up: a stalled master
+# fails either here (too few rows) or by dropping the worker at 10 s.
+bg_run stop -v -j 2 --log-every 20 "${LONG[@]}"
+wait_shooting stop 2
 victim=$(workers_of "$PID" | head -1)
-kill -STOP "$victim"; sleep 2; kill -CONT "$victim"
+kill -STOP "$victim"
+from=$(shots stop); t0=$(date +%s.%N)
+wait_shots stop $((from + 100))
+to=$(shots stop); t1=$(date +%s.%N)
+kill -CONT "$victim"
 wait "$PID"; rc=$?
-rows=$(awk -F, 'NR > 1 && $1 > 0.6 && $1 < 2.4' "$T/stop/log.csv" | wc -l)
-if [ "$rc" -eq 0 ] && [ "$rows" -ge 5 ] && ! grep -q lost "$T/stop.err"; then
-  pass "SIGSTOP of a worker for 2 s: no stall ($rows log rows while it was stopped), none lost"
+secs=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.1f", b - a }')
+rows=$(awk -F, -v a="$from" -v b="$to" 'NR > 1 && $2 > a && $2 <= b' "$T/stop/log.csv" | wc -l)
+if [ "$rc" -eq 0 ] && [ "$rows" -ge 5 ] && ! grep -q "lost (" "$T/stop.err"; then
+  pass "SIGSTOP of a worker for ${secs} s: no stall ($rows log rows while it was stopped), none lost"
   check_same "SIGSTOP of a worker: answer" "$T/stop/result.csv" "$T/seq/result.csv" 0.5
 else
   fail "SIGSTOP of a worker (exit $rc, $rows log rows while stopped; stderr: $(head -3 "$T/stop.err"))"
 fi
 
 # Stopped past --timeout 1: dropped, its patches computed by the other.
+# It stays stopped until the master says it dropped it (or gives up).
 bg_run stop2 -j 2 --timeout 1 "${LONG[@]}"
-wait_workers "$PID" 2; sleep 0.5
+wait_shooting stop2 2
 victim=$(workers_of "$PID" | head -1)
-kill -STOP "$victim"; sleep 2.5; kill -CONT "$victim" 2>/dev/null
+kill -STOP "$victim"
+wait_says stop2 "lost (silent for"
+kill -CONT "$victim" 2>/dev/null
 wait "$PID"; rc=$?
 if [ "$rc" -eq 0 ] && grep -q "lost (silent for" "$T/stop2.err"; then
   pass "SIGSTOP past --timeout: dropped ($(grep -m1 lost "$T/stop2.err"))"
