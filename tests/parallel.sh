@@ -110,7 +110,8 @@ if [ "$rc" -eq 0 ] && [ "$rows" -ge 5 ] && ! grep -q "lost (" "$T/stop.err"; the
   pass "SIGSTOP of a worker for ${secs} s: no stall ($rows log rows while it was stopped), none lost"
   check_same "SIGSTOP of a worker: answer" "$T/stop/result.csv" "$T/seq/result.csv" 0.5
 else
-  fail "SIGSTOP of a worker (exit $rc, $rows log rows while stopped; stderr: $(head -3 "$T/stop.err"))"
+  fail "SIGSTOP of a worker (exit $rc, $rows log rows in the ${secs} s it was stopped;" \
+    "$(grep -m1 "lost (" "$T/stop.err"); stderr: $(head -3 "$T/stop.err"))"
 fi
 
 # Stopped past --timeout 1: dropped, its patches computed by the other.
