@@ -157,7 +157,7 @@ void MasterRun::StartWorkers() {
   std::string err;
   std::signal(SIGPIPE, SIG_IGN);  // a dead worker is an error on its connection
   proto::SceneSetup setup{scene_, opts_.mesh, run_.resolution, run_.rotate, run_.seed};
-  auto pool = std::make_unique<WorkerPool>(setup, mesh_, opts_.pool);
+  auto pool = std::make_unique<WorkerPool>(std::move(setup), mesh_, opts_.pool);
   if (pool->SceneTooLarge())
     Die(kExitUsage, opts_.scene_path + ": too large to send to workers (protocol limit " +
                         std::to_string(proto::kMaxFrame >> 20) + " MiB); use -j 0");

@@ -82,8 +82,10 @@ class WorkerSource {
 // protocol of doc/protocol.txt, heartbeats both ways and deadlines.
 class WorkerPool : public Transport {
  public:
-  // Deadlines and heartbeats go by `clock` (tests drive it).
-  WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh, const PoolOptions& opts,
+  // Deadlines and heartbeats go by `clock` (tests drive it). `setup` is
+  // taken by value: it holds the whole scene, and a caller done with it
+  // moves it in rather than have it copied.
+  WorkerPool(proto::SceneSetup setup, const Mesh& mesh, const PoolOptions& opts,
              Clock* clock = MonotonicClock());
   ~WorkerPool() override;
   // The scene frame is larger than the protocol allows (a scene of some
