@@ -117,18 +117,16 @@ std::string SceneHash(const Scene& scene) {
   // Format 1 defines it as the SHA-256 of protocol 1's scene frame for the
   // default options: only the scene varies (the options are compared on
   // their own, CompareOptions), and the frame's later fields do not enter.
-  std::string payload;
-  PutU8(&payload, 1);        // rotate
-  PutVarint(&payload, 256);  // resolution
-  PutFixed32(&payload, 1);   // seed
-  PutVarint(&payload, 2);    // elements per patch
-  PutF64(&payload, 0);       // patch size
-  proto::PutScene(scene, &payload);
   std::string frame;
-  PutFixed32(&frame, uint32_t(payload.size()));
-  PutU8(&frame, uint8_t(proto::Msg::kScene));
-  PutFixed(&frame, 0, 3);
-  return Sha256Of(frame + payload);
+  const size_t start = proto::BeginFrame(proto::Msg::kScene, &frame);
+  PutU8(&frame, 1);        // rotate
+  PutVarint(&frame, 256);  // resolution
+  PutFixed32(&frame, 1);   // seed
+  PutVarint(&frame, 2);    // elements per patch
+  PutF64(&frame, 0);       // patch size
+  proto::PutScene(scene, &frame);
+  proto::EndFrame(start, &frame);
+  return Sha256Of(frame);
 }
 
 std::vector<int32_t> DivideHistory(const Mesh& mesh) {

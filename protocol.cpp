@@ -42,22 +42,6 @@ uint32_t MaxPayload(Msg m) {
   return 0;
 }
 
-// Writes a header with length 0 and returns where it starts.
-size_t BeginFrame(Msg type, std::string* out) {
-  size_t start = out->size();
-  PutFixed32(out, 0);
-  PutU8(out, uint8_t(type));
-  PutFixed(out, 0, 3);
-  return start;
-}
-
-// Fills in the payload length of the frame that starts at `start`.
-void EndFrame(size_t start, std::string* out) {
-  uint64_t len = out->size() - start - kHeaderSize;
-  CHECK(len <= 0xffffffffu);
-  EncodeFixed32(&(*out)[start], uint32_t(len));
-}
-
 bool Printable(const std::string& s) {
   for (char c : s)
     if (uint8_t(c) < 0x20 || uint8_t(c) > 0x7e) return false;
@@ -142,6 +126,22 @@ bool ValidSetup(const SceneSetup& m, std::string* err) {
 }
 
 }  // namespace
+
+// Writes a header with length 0 and returns where it starts.
+size_t BeginFrame(Msg type, std::string* out) {
+  size_t start = out->size();
+  PutFixed32(out, 0);
+  PutU8(out, uint8_t(type));
+  PutFixed(out, 0, 3);
+  return start;
+}
+
+// Fills in the payload length of the frame that starts at `start`.
+void EndFrame(size_t start, std::string* out) {
+  uint64_t len = out->size() - start - kHeaderSize;
+  CHECK(len <= 0xffffffffu);
+  EncodeFixed32(&(*out)[start], uint32_t(len));
+}
 
 const char* MsgName(Msg m) {
   switch (m) {

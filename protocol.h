@@ -79,6 +79,11 @@ struct Column {
   std::vector<FormFactor> ff;  // increasing elem, f > 0
 };
 
+// A frame by hand: BeginFrame appends a header of length 0 and returns
+// where it starts, EndFrame fills in the length of what followed.
+size_t BeginFrame(Msg type, std::string* out);
+void EndFrame(size_t start, std::string* out);
+
 // Appends a whole frame (header and payload) to *out.
 void EncodeHello(const Hello& m, std::string* out);
 void EncodeScene(const SceneSetup& m, std::string* out);
