@@ -43,6 +43,11 @@ $(B)/radiosity-parallel: $(B)/bench/parallel.o $(LIB_OBJS) $(SIM_OBJS)
 $(B)/radiosity-waves: $(B)/bench/waves.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
+# Big generated scenes (rooms of boxes, tessellated shipped scenes) for
+# benchmarks and tests; a stand-alone tool, linked with none of the program.
+$(B)/scenegen: $(B)/bench/scenegen.o
+	$(CXX) $(LDFLAGS) -o $@ $^
+
 $(B)/bench/%.o: bench/%.cpp | $(B)/bench
 	$(CXX) $(CPPFLAGS) -I. $(CXXFLAGS) -c -o $@ $<
 
@@ -63,7 +68,7 @@ deps:
 	@sh tests/deps.sh
 
 check: deps
-	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/unit_tests
+	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/unit_tests $(B)/scenegen
 	@$(MAKE) --no-print-directory -j$(NPROC) asan
 	@if sh fuzz/probe.sh >/dev/null; then $(MAKE) --no-print-directory -j$(NPROC) fuzz-build; fi
 	@sh tests/run.sh
@@ -79,14 +84,14 @@ demo: deps
 
 bench: deps
 	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
-	  $(B)/radiosity-waves
+	  $(B)/radiosity-waves $(B)/scenegen
 	@sh bench/run.sh
 
 # The paper's measurements with this machine's cores, written up as
 # bench/results/report.md (about 10 minutes; run it on an idle machine).
 report: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
-	  $(B)/radiosity-waves
+	  $(B)/radiosity-waves $(B)/scenegen
 	@sh bench/report
 
 install: radiosity
