@@ -6,11 +6,9 @@
 #include <cstdio>
 #include <cstring>
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include "coding.h"
 #include "crypto.h"
+#include "files.h"
 #include "protocol.h"
 
 namespace {
@@ -354,56 +352,17 @@ bool DecodeCheckpoint(const std::string& bytes, Checkpoint* c, std::string* err)
 
 bool WriteCheckpoint(const std::string& path, const Checkpoint& c, size_t* bytes,
                      std::string* err) {
-  const std::string data = EncodeCheckpoint(c), tmp = path + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    *err = tmp + ": " + std::strerror(errno);
-    return false;
-  }
-  size_t done = 0;
-  while (done < data.size()) {
-    const ssize_t n = ::write(fd, data.data() + done, data.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      *err = tmp + ": " + std::strerror(n < 0 ? errno : EIO);
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      return false;
-    }
-    done += size_t(n);
-  }
   // Synced before the rename: after a crash the name holds the old
   // checkpoint or the whole new one.
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    *err = tmp + ": " + std::strerror(errno);
-    ::unlink(tmp.c_str());
-    return false;
-  }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    *err = path + ": " + std::strerror(errno);
-    ::unlink(tmp.c_str());
-    return false;
-  }
+  const std::string data = EncodeCheckpoint(c);
+  if (!WriteFileAtomic(path, data, err, true)) return false;
   *bytes = data.size();
   return true;
 }
 
 bool ReadCheckpoint(const std::string& path, Checkpoint* c, std::string* err) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) {
-    *err = path + ": " + std::strerror(errno);
-    return false;
-  }
   std::string bytes;
-  char buf[1 << 16];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) bytes.append(buf, n);
-  const bool failed = std::ferror(f);
-  std::fclose(f);
-  if (failed) {
-    *err = path + ": cannot read: " + std::strerror(errno);
-    return false;
-  }
+  if (!ReadInput(path, kMaxCheckpointBytes, &bytes, err)) return false;
   if (!DecodeCheckpoint(bytes, c, err)) {
     *err = path + ": " + *err;
     return false;

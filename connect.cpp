@@ -19,6 +19,7 @@
 #include "check.h"
 #include "clock.h"
 #include "crypto.h"
+#include "files.h"
 #include "source.h"
 
 namespace {
@@ -260,7 +261,9 @@ bool ProveToMaster(int fd, const std::string& secret, const std::string& where, 
 }
 
 bool ReadSecret(const std::string& file, std::string* secret, std::string* err) {
-  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: a FIFO without a writer must not block the open; fstat
+  // refuses it below.
+  const int fd = ::open(file.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
   struct stat st;
   if (fd < 0 || ::fstat(fd, &st) != 0) {
     *err = file + ": " + std::strerror(errno);
@@ -270,7 +273,8 @@ bool ReadSecret(const std::string& file, std::string* secret, std::string* err) 
   std::string text;
   char buf[4096];
   ssize_t n = 0;
-  while (S_ISREG(st.st_mode) && text.size() < (1 << 16) && (n = ::read(fd, buf, sizeof buf)) > 0)
+  const bool readable = S_ISREG(st.st_mode) && uint64_t(st.st_size) <= kMaxSecretBytes;
+  while (readable && text.size() <= kMaxSecretBytes && (n = ::read(fd, buf, sizeof buf)) > 0)
     text.append(buf, size_t(n));
   ::close(fd);
   char mode[8];
@@ -280,8 +284,13 @@ bool ReadSecret(const std::string& file, std::string* secret, std::string* err) 
   } else if (st.st_mode & 077) {
     *err = file + ": the secret may be read or changed by others (mode " + mode +
            "); make it private with: chmod 600 " + file;
+  } else if (st.st_mode & 0100) {
+    *err = file + ": the secret must be mode 0600 or 0400, not " + mode + ": chmod 600 " + file;
   } else if (n < 0) {
     *err = file + ": " + std::strerror(errno);
+  } else if (!readable || text.size() > kMaxSecretBytes) {
+    *err = file + ": more than the limit of " + std::to_string(kMaxSecretBytes >> 10) +
+           " KiB for a secret";
   } else {
     text.erase(text.find_last_not_of(" \t\r\n") + 1);
     if (text.size() >= 16) {

@@ -189,7 +189,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   Options& o = *opts;
   o.workers = std::max(1L, sysconf(_SC_NPROCESSORS_ONLN));
   bool epsilon_given = false, worker_mode = false, workers_given = false, dump_hosts = false;
-  std::string secret_file;
+  std::string& secret_file = o.secret_file;
   opterr = 0;
   optind = 0;  // glibc: start afresh, so that a second call parses its own argv
   int c;

@@ -42,7 +42,7 @@ struct Options {
   int listen_port = 0;
   std::string connect, connect_host;
   int connect_port = 0;
-  std::string secret;  // the contents of --secret FILE
+  std::string secret_file, secret;  // --secret FILE and its contents
   // Workers from -H or --listen, beside or instead of the -j local ones.
   bool Remote() const { return !hosts.empty() || !listen.empty(); }
 

@@ -7,11 +7,14 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <random>
 
 #include <gtest/gtest.h>
 
 #include "mesh.h"
+#include "temp_dir.h"
 #include "test_util.h"
 #include "wire_util.h"
 
@@ -200,16 +203,38 @@ TEST(Checkpoint, FileIsWrittenAtomicallyAndReadBack) {
   std::string err;
   ASSERT_TRUE(WriteCheckpoint(path, Filled(), &bytes, &err)) << err;
   EXPECT_EQ(bytes, EncodeCheckpoint(Filled()).size());
-  EXPECT_NE(access((path + ".tmp").c_str(), F_OK), 0);  // renamed
+  EXPECT_NE(access((path + ".tmp").c_str(), F_OK), 0);  // renamed, nothing left beside it
   Checkpoint c;
   ASSERT_TRUE(ReadCheckpoint(path, &c, &err)) << err;
   EXPECT_EQ(c.edits, Filled().edits);
   EXPECT_FALSE(ReadCheckpoint(std::string(dir) + "/none", &c, &err));
   EXPECT_EQ(err, std::string(dir) + "/none: No such file or directory");
   EXPECT_FALSE(WriteCheckpoint(std::string(dir) + "/no/such/dir", Filled(), &bytes, &err));
-  EXPECT_EQ(err, std::string(dir) + "/no/such/dir.tmp: No such file or directory");
+  EXPECT_EQ(err, std::string(dir) + "/no/such/dir: cannot create a file in " + dir +
+                     "/no/such: No such file or directory");
   std::remove(path.c_str());
-  rmdir(dir);
+  rmdir(dir);  // fails if a temporary was left beside the checkpoint
+  EXPECT_NE(access(dir, F_OK), 0);
+}
+
+// A link planted where the old format wrote its temporary (FILE.tmp), or
+// at FILE itself, never makes the checkpoint replace what it points to.
+TEST(Checkpoint, PlantedLinksAreNotFollowed) {
+  TempDir dir;
+  const std::string victim = dir.Write("victim", "precious"), path = dir.path() + "/ck";
+  ASSERT_EQ(symlink(victim.c_str(), (path + ".tmp").c_str()), 0);
+  size_t bytes = 0;
+  std::string err;
+  ASSERT_TRUE(WriteCheckpoint(path, Filled(), &bytes, &err)) << err;
+  std::ifstream in(victim);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, "precious");
+  const std::string link = dir.path() + "/link";
+  ASSERT_EQ(symlink(victim.c_str(), link.c_str()), 0);
+  EXPECT_FALSE(WriteCheckpoint(link, Filled(), &bytes, &err));
+  EXPECT_EQ(err, link + ": is a symbolic link; not replaced");
+  EXPECT_FALSE(WriteCheckpoint("/dev/null", Filled(), &bytes, &err));
+  EXPECT_EQ(err, "/dev/null: is not a regular file; not replaced");
 }
 
 TEST(Checkpoint, DivideHistoryReplaysToTheSameMesh) {
