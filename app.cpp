@@ -42,22 +42,6 @@ std::string StoppedBy() {
 // The run's outputs not yet moved into place: removed when it dies.
 Staging* g_staging = nullptr;
 
-// A message as the terminal may show it: names from the command line and
-// the scene can hold control characters and escape sequences.
-std::string Printable(const std::string& text) {
-  std::string out;
-  for (unsigned char c : text) {
-    if (c >= 0x20 && c != 0x7f) {
-      out += char(c);
-    } else {
-      char hex[8];
-      std::snprintf(hex, sizeof hex, "\\x%02x", c);
-      out += hex;
-    }
-  }
-  return out;
-}
-
 void Say(const std::string& line) { std::fprintf(stderr, "radiosity: %s\n", Printable(line).c_str()); }
 
 [[noreturn]] void Die(int status, const std::string& msg) {
@@ -112,6 +96,20 @@ bool MakeDirs(const std::string& path, std::string* err) {
 }
 
 }  // namespace
+
+std::string Printable(const std::string& text) {
+  std::string out;
+  for (unsigned char c : text) {
+    if (c >= 0x20 && c != 0x7f) {
+      out += char(c);
+    } else {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02x", c);
+      out += hex;
+    }
+  }
+  return out;
+}
 
 ExitStatus DumpHosts(const Options& opts) {
   for (const HostSpec& h : opts.hosts) std::printf("%s\n", FormatHost(h).c_str());

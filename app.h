@@ -23,6 +23,10 @@
 #include "subdivide.h"
 #include "transport.h"
 
+// A message as the terminal may show it: names from the command line and
+// the scene can hold control characters and escape sequences, shown as \xNN.
+std::string Printable(const std::string& text);
+
 // --dump-hosts: the hosts of -H FILE as parsed, one a line on stdout.
 ExitStatus DumpHosts(const Options& opts);
 

@@ -57,7 +57,7 @@ enum class Parsed {
   kVersion,    // print the version
   kDumpHosts,  // print opts->hosts
   kWorker,     // speak the worker protocol (on opts->connect_host if set)
-  kNoScene,    // no scene or more than one: print kUsage on stderr
+  kNoScene,    // no scene: print kUsage on stderr
   kError,      // bad usage or input: *err is the line to print
 };
 
