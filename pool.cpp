@@ -1,5 +1,6 @@
 #include "pool.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <cstring>
@@ -161,6 +162,7 @@ int WorkerPool::Starting() const {
 void WorkerPool::Assign(int w, const proto::Assignment& a) {
   Worker& wk = workers_[w];
   CHECK(wk.state == State::kJoined);
+  if (wk.owed++ == 0) wk.progress = Now();
   proto::EncodeWork({a}, &wk.out);
 }
 
@@ -243,6 +245,7 @@ bool WorkerPool::Handle(int w, proto::Msg type, const std::string& payload,
       }
       wk.state = State::kJoined;
       events->push_back({WorkerEvent::kJoined, w, {}, ""});
+      for (const auto& s : sources_) s->Joined();
       return true;
     }
     case State::kJoined: {
@@ -258,6 +261,8 @@ bool WorkerPool::Handle(int w, proto::Msg type, const std::string& payload,
         *why = "sent a column out of the mesh's range";
         return false;
       }
+      wk.owed = std::max(0L, wk.owed - 1);
+      wk.progress = Now();
       events->push_back(std::move(ev));
       return true;
     }
@@ -306,6 +311,11 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
     } else if (wk.state == State::kJoined && now - wk.last_heard > opts_.timeout_s) {
       char buf[80];
       std::snprintf(buf, sizeof buf, "silent for %.1f s", now - wk.last_heard);
+      Lose(int(w), buf, events);
+    } else if (wk.state == State::kJoined && wk.owed > 0 && now - wk.progress > opts_.timeout_s) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "no column in %.1f s though given work (heartbeats only)",
+                    now - wk.progress);
       Lose(int(w), buf, events);
     } else if (wk.state == State::kJoined && wk.out.empty() &&
                now - wk.last_sent > opts_.heartbeat_s) {

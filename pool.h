@@ -56,7 +56,7 @@ std::string SelfExe();
 
 struct PoolOptions {
   double heartbeat_s = 1.0;  // send a heartbeat after this much silence
-  double timeout_s = 10.0;   // drop a worker silent for this long
+  double timeout_s = 10.0;   // drop a worker silent, or given work and no column, this long
   double hello_s = 30.0;     // deadline for hello + mesh build
 };
 
@@ -76,6 +76,8 @@ class WorkerSource {
   virtual int Expected() const = 0;
   // No more workers: stop the threads, close the sockets.
   virtual void Stop() = 0;
+  // A worker of the pool (of any source) has joined.
+  virtual void Joined() {}
 };
 
 // Workers behind Conns, driven by poll(2) with non-blocking I/O: the
@@ -117,6 +119,11 @@ class WorkerPool : public Transport {
     std::string out;        // encoded frames not yet written
     size_t out_pos = 0;
     double last_heard = 0, last_sent = 0, started = 0;
+    // Patches given and not answered with a column, and when the last
+    // column came (or the first of them was given): heartbeats say a
+    // worker lives, columns that it works.
+    long owed = 0;
+    double progress = 0;
   };
   // ended: the worker closed its end (so it is exiting: wait for its
   // status); otherwise it is killed.

@@ -160,4 +160,87 @@ else
 fi
 kill "$PID" 2>/dev/null; wait "$PID" 2>/dev/null
 
+# --- 4, 3: connect-back ------------------------------------------------------
+# A peer of the handshake: "auth PORT SECRET" proves it knows the secret,
+# then closes (a worker that fails at once); "hold PORT N FILE" opens N
+# connections, says so in FILE and keeps them open, silent.
+cat >"$T/peer.py" <<'PY'
+import hashlib, hmac, os, socket, sys, time
+mode, port = sys.argv[1], int(sys.argv[2])
+if mode == "auth":
+    key = open(sys.argv[3], "rb").read().rstrip(b" \t\r\n")
+    s = socket.create_connection(("127.0.0.1", port))
+    got = b""
+    while len(got) < 37: got += s.recv(37 - len(got))
+    mine = os.urandom(32)
+    s.sendall(mine + hmac.new(key, b"radiosity worker" + got[5:] + mine, hashlib.sha256).digest())
+    got = b""
+    while len(got) < 32: got += s.recv(32 - len(got))
+    s.close()
+else:
+    held = [socket.create_connection(("127.0.0.1", port)) for _ in range(int(sys.argv[3]))]
+    open(sys.argv[4], "w").write("%d\n" % len(held))
+    sys.stdin.read()  # until the test closes our stdin
+PY
+listen_port() { sed -n 's/^radiosity: listening for workers on 127.0.0.1:\([0-9]*\)$/\1/p' "$T/$1.err"; }
+good_worker() { "$RADIOSITY" --worker --connect "127.0.0.1:$1" --secret "$secret" 2>"$T/good.err"; }
+CONNECT=(-j 0 -r 16 -s 5 --no-subdivide --listen 127.0.0.1:0 --secret "$secret")
+
+bg_run first "${CONNECT[@]}" "$CB"
+wait_says first "listening for workers on"
+port=$(listen_port first)
+python3 "$T/peer.py" auth "$port" "$secret"
+wait_says first "worker at 127.0.0.1:[0-9]*: "  # its failure, whatever it is
+good_worker "$port"
+wait "$PID"; rc=$?
+if [ "$rc" -eq 0 ] && [ -s "$T/first/result.csv" ]; then
+  pass "a first connect-back worker that fails: the master waits, the next one finishes the run"
+else
+  fail "a first connect-back worker that fails (exit $rc: $(grep -v '^wave' "$T/first.err" | tail -2 | tr '\n' ' '))"
+fi
+
+fds() { ls "/proc/$1/fd" 2>/dev/null | wc -l; }
+bg_run held "${CONNECT[@]}" "$CB"
+wait_says held "listening for workers on"
+port=$(listen_port held)
+base=$(fds "$PID")
+mkfifo "$T/hold.in"
+python3 "$T/peer.py" hold "$port" 60 "$T/held.n" <"$T/hold.in" &
+hold=$!
+exec 7>"$T/hold.in"
+wait_until 20 test -s "$T/held.n"
+wait_until 20 test "$(fds "$PID")" -ge $((base + 32))
+n=$(fds "$PID")
+exec 7>&-
+wait "$hold"
+good_worker "$port"
+wait "$PID"; rc=$?
+if [ "$n" -le $((base + 34)) ] && [ "$rc" -eq 0 ] && [ "$(grep -c refused "$T/held.err")" -le 10 ]; then
+  pass "60 connections that never authenticate: $((n - base)) held at once, refusals said $(grep -c refused "$T/held.err") times, the run ends (exit 0)"
+else
+  fail "60 connections that never authenticate (held $((n - base)) descriptors, exit $rc, $(grep -c refused "$T/held.err") refusal lines)"
+fi
+
+# Out of descriptors: one line, a pause, and the run goes on.
+mkdir -p "$T/emfile"
+(ulimit -n 24; exec "$RADIOSITY" "${CONNECT[@]}" -o "$T/emfile" "$CB") >"$T/emfile.out" 2>"$T/emfile.err" &
+PID=$!
+wait_says emfile "listening for workers on"
+port=$(listen_port emfile)
+: >"$T/held.n"
+python3 "$T/peer.py" hold "$port" 30 "$T/held.n" <"$T/hold.in" &
+hold=$!
+exec 7>"$T/hold.in"
+wait_says emfile "cannot accept (Too many open files)"
+exec 7>&-
+wait "$hold"
+good_worker "$port"
+wait "$PID"; rc=$?
+lines=$(wc -l <"$T/emfile.err")
+if [ "$rc" -eq 0 ] && [ "$(grep -c "cannot accept" "$T/emfile.err")" -eq 1 ] && [ "$lines" -le 20 ]; then
+  pass "EMFILE while accepting: said once, $lines lines in all, the run ends (exit 0)"
+else
+  fail "EMFILE while accepting (exit $rc, $lines lines: $(head -3 "$T/emfile.err" | tr '\n' ' '))"
+fi
+
 finish
