@@ -65,11 +65,6 @@ bool OutputName(const std::string& name) {
          std::all_of(name.begin() + 6, name.begin() + long(dot), [](char c) { return c >= '0' && c <= '9'; });
 }
 
-std::string DirName(const std::string& path) {
-  const size_t slash = path.rfind('/');
-  return slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
-}
-
 // Whether PATH names NAME in directory DIR, by the directories' identity.
 bool InDir(const std::string& path, const std::string& dir, std::string* name) {
   struct stat a, b;
@@ -220,7 +215,6 @@ void MasterRun::CheckOutputs(const std::vector<Input>& ck_inputs) {
     const std::string why = Unwritable(path, in);
     if (!why.empty()) Die(kExitUsage, opt + path + ": " + why + "; refusing to overwrite it");
   };
-  if (opts_.out_dir.empty()) Die(kExitUsage, "-o '': the output directory needs a name");
   if (!MakeDirs(opts_.out_dir, &err)) Die(kExitFailure, err);
   for (const char* n : {"log.csv", "error.svg", "result.csv", "result.ply", "result.gltf",
                         "result.bin"})

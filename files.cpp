@@ -15,12 +15,6 @@ namespace {
 
 std::string Errno(const std::string& path) { return path + ": " + std::strerror(errno); }
 
-std::string DirOf(const std::string& path) {
-  const size_t slash = path.rfind('/');
-  if (slash == std::string::npos) return ".";
-  return slash == 0 ? "/" : path.substr(0, slash);
-}
-
 std::string Bytes(uint64_t n) {
   return n >= (1u << 30) && n % (1u << 30) == 0 ? std::to_string(n >> 30) + " GiB"
          : n >= (1u << 20) && n % (1u << 20) == 0 ? std::to_string(n >> 20) + " MiB"
@@ -149,7 +143,7 @@ bool WriteFileAtomic(const std::string& path, const std::string& data, std::stri
   std::string tmp = path + ".XXXXXX";
   const int fd = ::mkostemp(&tmp[0], O_CLOEXEC);
   if (fd < 0) {
-    *err = path + ": cannot create a file in " + DirOf(path) + ": " + std::strerror(errno);
+    *err = path + ": cannot create a file in " + DirName(path) + ": " + std::strerror(errno);
     return false;
   }
   bool ok = ::fchmod(fd, CreateMode()) == 0 && WriteAll(fd, data) && (!sync || ::fsync(fd) == 0);
@@ -160,6 +154,12 @@ bool WriteFileAtomic(const std::string& path, const std::string& data, std::stri
   if (!ok) *err = path + ": " + std::strerror(e);
   ::unlink(tmp.c_str());
   return false;
+}
+
+std::string DirName(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  if (slash == std::string::npos) return ".";
+  return slash == 0 ? "/" : path.substr(0, slash);
 }
 
 Staging::~Staging() { Discard(); }

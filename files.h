@@ -67,6 +67,9 @@ std::string Unwritable(const std::string& path, const std::vector<Input>& inputs
 bool WriteFileAtomic(const std::string& path, const std::string& data, std::string* err,
                      bool sync = false);
 
+// The directory of PATH: "." for a bare name.
+std::string DirName(const std::string& path);
+
 // The outputs of one run: written into DIR/.radiosity-XXXXXX, moved onto
 // DIR/NAME together by Commit().
 class Staging {

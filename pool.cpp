@@ -312,11 +312,6 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
       char buf[80];
       std::snprintf(buf, sizeof buf, "silent for %.1f s", now - wk.last_heard);
       Lose(int(w), buf, events);
-    } else if (wk.state == State::kJoined && wk.owed > 0 && now - wk.progress > opts_.timeout_s) {
-      char buf[96];
-      std::snprintf(buf, sizeof buf, "no column in %.1f s though given work (heartbeats only)",
-                    now - wk.progress);
-      Lose(int(w), buf, events);
     } else if (wk.state == State::kJoined && wk.out.empty() &&
                now - wk.last_sent > opts_.heartbeat_s) {
       proto::EncodeHeartbeat(&wk.out);
@@ -347,14 +342,27 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
   const double wait = std::min(timeout, opts_.heartbeat_s / 2);
   int n = ::poll(fds.data(), fds.size(), int(std::max(0.0, wait) * 1000));
   for (int w : buffered) Receive(w, events);
-  if (n <= 0) return;
-  for (size_t i = 0; i < nworkers; ++i) {
-    if (fds[i].revents & POLLOUT) Flush(who[i], events);
-    if (workers_[who[i]].state != State::kLost && (fds[i].revents & (POLLIN | POLLHUP | POLLERR)))
-      Receive(who[i], events);
+  if (n > 0) {
+    for (size_t i = 0; i < nworkers; ++i) {
+      if (fds[i].revents & POLLOUT) Flush(who[i], events);
+      if (workers_[who[i]].state != State::kLost && (fds[i].revents & (POLLIN | POLLHUP | POLLERR)))
+        Receive(who[i], events);
+    }
+    for (size_t i = nworkers; i < fds.size(); ++i)
+      if (fds[i].revents) sources_[i - nworkers]->Take(this);
   }
-  for (size_t i = nworkers; i < fds.size(); ++i)
-    if (fds[i].revents) sources_[i - nworkers]->Take(this);
+  // Progress is judged after reading, so that a column that came while
+  // the master was busy elsewhere (a picture, a division pass) counts.
+  now = Now();
+  for (size_t w = 0; w < workers_.size(); ++w) {
+    const Worker& wk = workers_[w];
+    if (wk.state == State::kJoined && wk.owed > 0 && now - wk.progress > opts_.timeout_s) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "no column in %.1f s though given work (heartbeats only)",
+                    now - wk.progress);
+      Lose(int(w), buf, events);
+    }
+  }
 }
 
 void WorkerPool::Shutdown() {
