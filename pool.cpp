@@ -134,13 +134,15 @@ WorkerPool::WorkerPool(proto::SceneSetup setup, const Mesh& mesh,
 
 WorkerPool::~WorkerPool() { Shutdown(); }
 
-double WorkerPool::Now() { return clock_->Now() - epoch_; }
+double WorkerPool::Clk() const { return clock_->Now() - epoch_; }
+
+double WorkerPool::Now() { return joined_at_ < 0 ? 0 : Clk() - joined_at_; }
 
 void WorkerPool::Add(std::unique_ptr<Conn> conn, const std::string& name) {
   Worker w;
   w.name = name;
   w.conn = std::move(conn);
-  w.started = w.last_heard = w.last_sent = Now();
+  w.started = w.last_heard = w.last_sent = Clk();
   w.out = scene_frame_;
   // A worker that joins late (or replaces a lost one) gets the hierarchy
   // as it is now: every edit so far, in order, right after the scene.
@@ -162,7 +164,7 @@ int WorkerPool::Starting() const {
 void WorkerPool::Assign(int w, const proto::Assignment& a) {
   Worker& wk = workers_[w];
   CHECK(wk.state == State::kJoined);
-  if (wk.owed++ == 0) wk.progress = Now();
+  if (wk.owed++ == 0) wk.progress = Clk();
   proto::EncodeWork({a}, &wk.out);
 }
 
@@ -194,7 +196,7 @@ void WorkerPool::Flush(int w, std::vector<WorkerEvent>* events) {
     }
     wk.out_pos += size_t(n);
     sent_ += uint64_t(n);
-    wk.last_sent = Now();
+    wk.last_sent = Clk();
   }
   if (wk.out_pos == wk.out.size()) {
     wk.out.clear();
@@ -244,6 +246,7 @@ bool WorkerPool::Handle(int w, proto::Msg type, const std::string& payload,
         return false;
       }
       wk.state = State::kJoined;
+      if (joined_at_ < 0) joined_at_ = Clk();
       events->push_back({WorkerEvent::kJoined, w, {}, ""});
       for (const auto& s : sources_) s->Joined();
       return true;
@@ -262,7 +265,7 @@ bool WorkerPool::Handle(int w, proto::Msg type, const std::string& payload,
         return false;
       }
       wk.owed = std::max(0L, wk.owed - 1);
-      wk.progress = Now();
+      wk.progress = Clk();
       events->push_back(std::move(ev));
       return true;
     }
@@ -282,7 +285,7 @@ void WorkerPool::Receive(int w, std::vector<WorkerEvent>* events) {
     if (n < 0) { Lose(w, std::string("cannot read: ") + std::strerror(errno), events, true); return; }
     if (n == 0) { Lose(w, "closed the connection", events, true); return; }
     received_ += uint64_t(n);
-    wk.last_heard = Now();
+    wk.last_heard = Clk();
     wk.in.Append(buf, size_t(n));
     proto::Msg type;
     std::string payload, err;
@@ -302,7 +305,7 @@ void WorkerPool::Receive(int w, std::vector<WorkerEvent>* events) {
 
 void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
   const size_t before = events->size();
-  double now = Now();
+  double now = Clk();
   for (size_t w = 0; w < workers_.size(); ++w) {
     Worker& wk = workers_[w];
     if (wk.state == State::kLost) continue;
@@ -353,7 +356,7 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
   }
   // Progress is judged after reading, so that a column that came while
   // the master was busy elsewhere (a picture, a division pass) counts.
-  now = Now();
+  now = Clk();
   for (size_t w = 0; w < workers_.size(); ++w) {
     const Worker& wk = workers_[w];
     if (wk.state == State::kJoined && wk.owed > 0 && now - wk.progress > opts_.timeout_s) {

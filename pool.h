@@ -104,6 +104,9 @@ class WorkerPool : public Transport {
   void Assign(int w, const proto::Assignment& a) override;
   void Divide(const std::vector<int32_t>& elems) override;
   void Poll(double timeout, std::vector<WorkerEvent>* events) override;
+  // The run's clock: 0 until the first worker joins, so that waiting for
+  // workers (connect-back, ssh set-up, start-up) does not count against
+  // -t; the deadlines go by the pool's own clock.
   double Now() override;
   uint64_t BytesSent() const override { return sent_; }
   uint64_t BytesReceived() const override { return received_; }
@@ -134,6 +137,7 @@ class WorkerPool : public Transport {
   bool Handle(int w, proto::Msg type, const std::string& payload,
               std::vector<WorkerEvent>* events, std::string* why);
   void Queue(int w, double now);
+  double Clk() const;  // seconds since the pool was made
 
   const Mesh& mesh_;
   std::string scene_frame_;  // encoded once, sent to every worker
@@ -145,6 +149,7 @@ class WorkerPool : public Transport {
   std::vector<std::unique_ptr<WorkerSource>> sources_;
   uint64_t sent_ = 0, received_ = 0;
   double epoch_;
+  double joined_at_ = -1;  // Clk() when the first worker joined
 };
 
 #endif

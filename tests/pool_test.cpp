@@ -226,6 +226,18 @@ TEST_F(PoolTest, AWorkerGivenWorkThatSendsNoColumnIsDropped) {
   EXPECT_EQ(LostWhy(), "no column in 12.0 s though given work (heartbeats only)");
 }
 
+// The run's clock starts when the first worker joins: a run that waits
+// for its workers (connect-back, ssh) does not spend its -t on waiting.
+TEST_F(PoolTest, TheRunClockStartsAtTheFirstJoin) {
+  EXPECT_EQ(pool_.Now(), 0);
+  clock_.now += 25;  // waiting for a worker
+  EXPECT_EQ(pool_.Now(), 0);
+  Peer p = Joined();
+  EXPECT_EQ(pool_.Now(), 0);
+  clock_.now += 1.5;
+  EXPECT_EQ(pool_.Now(), 1.5);
+}
+
 TEST_F(PoolTest, GarbageIsABadFrame) {
   Peer p = Connect();
   ReadSetup(&p);
