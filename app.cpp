@@ -14,6 +14,7 @@
 #include "clock.h"
 #include "connect.h"
 #include "errorchart.h"
+#include "files.h"
 #include "hosts.h"
 #include "inprocess.h"
 #include "pool.h"
@@ -22,19 +23,54 @@
 
 namespace {
 
-volatile std::sig_atomic_t g_stop = 0;
+volatile std::sig_atomic_t g_stop = 0;  // the signal that stops the run
 
 void OnSignal(int sig) {
   if (g_stop) {  // a second signal: leave at once
     std::signal(sig, SIG_DFL);
     std::raise(sig);
   }
-  g_stop = 1;
+  g_stop = sig;
 }
 
+std::string StoppedBy() {
+  const char* name = g_stop == SIGINT ? "SIGINT" : g_stop == SIGTERM ? "SIGTERM"
+                     : g_stop == SIGHUP ? "SIGHUP" : nullptr;
+  return name ? std::string("stopped on request (") + name + ")" : "stopped on request";
+}
+
+// The run's outputs not yet moved into place: removed when it dies.
+Staging* g_staging = nullptr;
+
+void Say(const std::string& line) { std::fprintf(stderr, "radiosity: %s\n", Printable(line).c_str()); }
+
 [[noreturn]] void Die(int status, const std::string& msg) {
-  std::fprintf(stderr, "radiosity: %s\n", msg.c_str());
+  if (g_staging) g_staging->Discard();
+  Say(msg);
   std::exit(status);
+}
+
+// The names of a run's outputs in its directory: what a run replaces, and
+// removes when it did not write it this time (man page, FILES).
+bool OutputName(const std::string& name) {
+  static const char* const kNames[] = {"log.csv",    "error.svg",   "result.csv", "result.ply",
+                                       "result.gltf", "result.bin", "final.png",  "final.ppm"};
+  for (const char* n : kNames)
+    if (name == n) return true;
+  // frame-NN.png or .ppm, NN two or more digits
+  const size_t dot = name.rfind('.');
+  if (name.compare(0, 6, "frame-") != 0 || dot == std::string::npos || dot < 8) return false;
+  const std::string ext = name.substr(dot);
+  return (ext == ".png" || ext == ".ppm") &&
+         std::all_of(name.begin() + 6, name.begin() + long(dot), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+// Whether PATH names NAME in directory DIR, by the directories' identity.
+bool InDir(const std::string& path, const std::string& dir, std::string* name) {
+  struct stat a, b;
+  *name = path.substr(path.rfind('/') + 1);
+  return ::stat(DirName(path).c_str(), &a) == 0 && ::stat(dir.c_str(), &b) == 0 &&
+         a.st_dev == b.st_dev && a.st_ino == b.st_ino;
 }
 
 bool MakeDirs(const std::string& path, std::string* err) {
@@ -56,6 +92,20 @@ bool MakeDirs(const std::string& path, std::string* err) {
 
 }  // namespace
 
+std::string Printable(const std::string& text) {
+  std::string out;
+  for (unsigned char c : text) {
+    if (c >= 0x20 && c != 0x7f) {
+      out += char(c);
+    } else {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02x", c);
+      out += hex;
+    }
+  }
+  return out;
+}
+
 ExitStatus DumpHosts(const Options& opts) {
   for (const HostSpec& h : opts.hosts) std::printf("%s\n", FormatHost(h).c_str());
   return kExitOk;
@@ -75,14 +125,25 @@ ExitStatus WorkerMain(const Options& opts) {
 
 MasterRun::MasterRun(const Options& opts) : opts_(opts), run_(opts.run) {}
 
-MasterRun::~MasterRun() = default;
+MasterRun::~MasterRun() { g_staging = nullptr; }
 
 void MasterRun::Build() {
   std::string err;
   std::vector<std::string> warnings;
+  // A closed stderr (piped into head, a gone terminal) is no reason to
+  // lose the run: writes to it fail, the run goes on.
+  std::signal(SIGPIPE, SIG_IGN);
   const bool loaded = LoadScene(opts_.scene_path, &scene_, &err, &warnings);
-  for (const std::string& w : warnings) std::fprintf(stderr, "radiosity: warning: %s\n", w.c_str());
+  for (const std::string& w : warnings) Say("warning: " + w);
   if (!loaded) Die(kExitUsage, err);
+  // What the run reads, that nothing it writes may replace.
+  auto input = [&](const std::string& what, const std::string& path) {
+    if (!path.empty() && !AddInput(what, path, &inputs_, &err)) Die(kExitUsage, err);
+  };
+  for (const std::string& f : scene_.files)
+    input(f == scene_.path ? "the scene" : "an MTL file of the scene", f);
+  input("the --secret file", opts_.secret_file);
+  input("the hosts file", opts_.hosts_file);
 
   camera_ = scene_.has_camera ? scene_.camera : FrameBox(scene_.lo, scene_.hi);
   if (!opts_.camera_text.empty() && !ParseCamera(opts_.camera_text, &camera_, &err))
@@ -90,6 +151,7 @@ void MasterRun::Build() {
 
   if (!opts_.reference.empty() && !ReadReference(opts_.reference, scene_, &ref_, &err))
     Die(kExitUsage, err);
+  input("the --reference file", opts_.reference);
 
   if (!BuildMesh(scene_, opts_.mesh, &mesh_, &err)) Die(kExitUsage, opts_.scene_path + ": " + err);
   if (opts_.verbosity >= 2)
@@ -101,24 +163,23 @@ void MasterRun::Build() {
   const SolveOptions solve{run_.overshoot, run_.resolution, run_.rotate, run_.seed,
                            run_.log_every,  opts_.mesh,     opts_.subdivide, opts_.sub};
   identity_ = Identify(scene_, mesh_, solve);
+  // The checkpoint may replace the one resumed from: that is how a run
+  // goes on from its own checkpoints.
+  std::vector<Input> ck_inputs = inputs_;
   if (!opts_.resume_file.empty()) {
     if (!ReadCheckpoint(opts_.resume_file, &resume_, &err)) Die(kExitUsage, err);
     if (!CheckIdentity(resume_, identity_, &err)) Die(kExitUsage, opts_.resume_file + ": " + err);
+    input("the --resume checkpoint", opts_.resume_file);
   }
-  if (!opts_.checkpoint_file.empty()) {
-    const std::string tmp = opts_.checkpoint_file + ".tmp";
-    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
-    if (fd < 0) Die(kExitFailure, "--checkpoint: " + tmp + ": " + std::strerror(errno));
-    ::close(fd);
-    ::unlink(tmp.c_str());
-  }
+  CheckOutputs(ck_inputs);
 
-  if (!MakeDirs(opts_.out_dir, &err)) Die(kExitFailure, err);
-  if (!log_.Open(opts_.out_dir + "/log.csv", &err)) Die(kExitFailure, err);
+  if (!staging_.Open(opts_.out_dir, &err)) Die(kExitFailure, err);
+  g_staging = &staging_;
+  if (!log_.Open(staging_.Path("log.csv"), &err)) Die(kExitFailure, err);
   if (!opts_.resume_file.empty()) log_.Restore(resume_.log);
 
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
+  // A closed terminal or ssh session (SIGHUP) stops the run as Ctrl-C does.
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, OnSignal);
   run_.stop = &g_stop;
   solver_ = std::make_unique<Solver>(mesh_, run_.overshoot);
   // Progress: a line redrawn in place on a terminal, else a line every 2 s
@@ -145,6 +206,37 @@ void MasterRun::Build() {
   }
 }
 
+// Nothing the run writes may replace one of its inputs or anything but a
+// regular file: checked before the run starts (and again as each output
+// is moved into place, Staging::Commit).
+void MasterRun::CheckOutputs(const std::vector<Input>& ck_inputs) {
+  std::string err, name;
+  auto check = [&](const std::string& opt, const std::string& path, const std::vector<Input>& in) {
+    const std::string why = Unwritable(path, in);
+    if (!why.empty()) Die(kExitUsage, opt + path + ": " + why + "; refusing to overwrite it");
+  };
+  if (!MakeDirs(opts_.out_dir, &err)) Die(kExitFailure, err);
+  for (const char* n : {"log.csv", "error.svg", "result.csv", "result.ply", "result.gltf",
+                        "result.bin"})
+    check("", opts_.out_dir + "/" + n, inputs_);
+  check("", opts_.out_dir + "/final." + opts_.format, inputs_);
+  if (!opts_.converge.empty()) check("--converge ", opts_.converge, inputs_);
+  const std::string& ck = opts_.checkpoint_file;
+  if (ck.empty()) return;
+  check("--checkpoint ", ck, ck_inputs);
+  if (InDir(ck, opts_.out_dir, &name) && OutputName(name))
+    Die(kExitUsage, "--checkpoint " + ck + ": is an output of this run (" + name +
+                        " in -o " + opts_.out_dir + "); choose another name");
+  // Writable: a file can be made beside it (the checkpoint's temporary).
+  std::string probe = ck + ".XXXXXX";
+  const int fd = ::mkostemp(&probe[0], O_CLOEXEC);
+  if (fd < 0)
+    Die(kExitFailure, "--checkpoint " + ck + ": cannot create a file in " + DirName(ck) + ": " +
+                          std::strerror(errno));
+  ::close(fd);
+  ::unlink(probe.c_str());
+}
+
 void MasterRun::StartWorkers() {
   // The master itself: alone with -j 0, and when every worker is lost.
   run_.fallback = [this] {
@@ -155,7 +247,6 @@ void MasterRun::StartWorkers() {
     return;
   }
   std::string err;
-  std::signal(SIGPIPE, SIG_IGN);  // a dead worker is an error on its connection
   proto::SceneSetup setup{scene_, opts_.mesh, run_.resolution, run_.rotate, run_.seed};
   auto pool = std::make_unique<WorkerPool>(std::move(setup), mesh_, opts_.pool);
   if (pool->SceneTooLarge())
@@ -192,8 +283,8 @@ void MasterRun::StartWorkers() {
     std::unique_ptr<WorkerSource> listener =
         Listen(opts_.listen_host, opts_.listen_port, opts_.secret, note, &bound, &err);
     if (!listener) Die(kExitFailure, "--listen " + opts_.listen + ": " + err);
-    if (opts_.verbosity >= 1)
-      std::fprintf(stderr, "radiosity: listening for workers on %s\n", bound.c_str());
+    // Said even with -q: with port 0 the workers need it.
+    std::fprintf(stderr, "radiosity: listening for workers on %s\n", bound.c_str());
     pool->AddSource(std::move(listener));
   }
   transport_ = std::move(pool);
@@ -241,14 +332,14 @@ void MasterRun::OnSample(const Sample& s) {
 // Workers joining, lost or skipped: above the progress line; -q keeps only
 // the warnings.
 void MasterRun::Note(const std::string& line, bool warning) {
-  if (opts_.verbosity == 1) progress_->Note(line);
-  else if (warning || opts_.verbosity >= 2) std::fprintf(stderr, "radiosity: %s\n", line.c_str());
+  if (opts_.verbosity == 1) progress_->Note(Printable(line));
+  else if (warning || opts_.verbosity >= 2) Say(line);
 }
 
 std::string MasterRun::FrameName(int wave) const {
   char name[32];
-  std::snprintf(name, sizeof name, "/frame-%02d.", wave);
-  return opts_.out_dir + name + opts_.format;
+  std::snprintf(name, sizeof name, "frame-%02d.", wave);
+  return staging_.Path(name + opts_.format);
 }
 
 // A picture of the solution as it stands: the end of a wave, the final one.
@@ -291,33 +382,47 @@ void MasterRun::WriteOutputs() {
   // Drawn even when the run failed: how it went is what one wants to see.
   const std::string& scene_path = opts_.scene_path;
   const std::string scene_name = scene_path.substr(scene_path.rfind('/') + 1);
-  if (!WriteErrorChart(out + "/error.svg", scene_name + ": error against run time", log_.rows(),
-                       &err))
+  if (!WriteErrorChart(staging_.Path("error.svg"), scene_name + ": error against run time",
+                       log_.rows(), &err))
     Die(kExitFailure, err);
-  if (r.status == RunStatus::kNoWorkers) Die(kExitFailure, r.why + "; no results written");
-  if (r.status == RunStatus::kNotConverged)
+  // Every output of the run moved into place at once, and the rest of an
+  // earlier run's removed: the directory holds one run's files.
+  auto commit = [&] {
+    if (!staging_.Commit(inputs_, OutputName, &err)) Die(kExitFailure, err);
+  };
+  if (r.status == RunStatus::kNoWorkers) {
+    commit();
+    Die(kExitFailure, r.why + "; no results written");
+  }
+  if (r.status == RunStatus::kNotConverged) {
+    commit();
     Die(kExitFailure, "did not converge after " + std::to_string(r.shots) + " shots: " + r.why +
                           "; no results written");
+  }
 
   const std::vector<glm::dvec3> face_b = FaceRadiosity(mesh_, solver_->radiosity());
-  if (!WriteResultCsv(out + "/result.csv", scene_, face_b, &err)) Die(kExitFailure, err);
-  const auto shaded = Picture({FrameName(r.waves), out + "/final." + opts_.format});
+  if (!WriteResultCsv(staging_.Path("result.csv"), scene_, face_b, &err)) Die(kExitFailure, err);
+  const auto shaded = Picture({FrameName(r.waves), staging_.Path("final." + opts_.format)});
   if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", r.waves, mesh_.LeafCount());
-  if (!WritePly(shaded.first, shaded.second, out + "/result.ply", &err) ||
-      !WriteGltf(shaded.first, shaded.second, out + "/result.gltf", out + "/result.bin", &err))
+  if (!WritePly(shaded.first, shaded.second, staging_.Path("result.ply"), &err) ||
+      !WriteGltf(shaded.first, shaded.second, staging_.Path("result.gltf"),
+                 staging_.Path("result.bin"), &err))
     Die(kExitFailure, err);
   if (!opts_.converge.empty()) {
     // A reference must be converged: one cut short by -s, -t or a signal
     // would pass its own error on to every run measured against it.
-    if (r.status != RunStatus::kConverged)
+    if (r.status != RunStatus::kConverged) {
+      commit();
       Die(kExitFailure, "--converge " + opts_.converge + ": not written, the run did not converge (" +
                             (r.why.empty() ? std::string("stopped on request") : r.why) + ")");
+    }
     if (!WriteResultCsv(opts_.converge, scene_, face_b, &err)) Die(kExitFailure, err);
     if (opts_.verbosity >= 1)
       std::fprintf(stderr, "radiosity: reference (epsilon %g) in %s: use --reference %s\n",
                    run_.epsilon, opts_.converge.c_str(), opts_.converge.c_str());
   }
+  commit();
 
   if (subdivider_ && subdivider_->capped())
     std::fprintf(stderr, "radiosity: warning: subdivision stopped at %ld elements: the next "
@@ -328,14 +433,14 @@ void MasterRun::WriteOutputs() {
                  "emitted (epsilon %g)\n",
                  r.why.c_str(), r.unshot, run_.epsilon);
   if (opts_.verbosity >= 1) {
-    const char* how = r.status == RunStatus::kConverged ? "converged"
-                      : r.status == RunStatus::kStopped ? "stopped on request"
-                                                        : r.why.c_str();
+    const std::string how = r.status == RunStatus::kConverged ? "converged"
+                            : r.status == RunStatus::kStopped ? StoppedBy()
+                                                              : r.why;
     std::fprintf(stderr,
                  "radiosity: %s: %ld shots in %.2f s, unshot %.3g of emitted; "
                  "%zu patches, %ld elements (%ld built; %d waves, %ld division passes "
                  "in %.3f s); results in %s/\n",
-                 how, r.shots, r.seconds, r.unshot, mesh_.patches.size(), mesh_.LeafCount(),
+                 how.c_str(), r.shots, r.seconds, r.unshot, mesh_.patches.size(), mesh_.LeafCount(),
                  built_, r.waves, r.passes, r.subdivide_s, out.c_str());
   }
 }

@@ -11,6 +11,7 @@
 
 #include "checkpoint.h"
 #include "exit_status.h"
+#include "files.h"
 #include "image.h"
 #include "mesh.h"
 #include "options.h"
@@ -21,6 +22,10 @@
 #include "solver.h"
 #include "subdivide.h"
 #include "transport.h"
+
+// A message as the terminal may show it: names from the command line and
+// the scene can hold control characters and escape sequences, shown as \xNN.
+std::string Printable(const std::string& text);
 
 // --dump-hosts: the hosts of -H FILE as parsed, one a line on stdout.
 ExitStatus DumpHosts(const Options& opts);
@@ -47,6 +52,7 @@ class MasterRun {
   void WriteOutputs();
 
  private:
+  void CheckOutputs(const std::vector<Input>& ck_inputs);
   void StartWorkers();
   void Resume();
   void OnSample(const Sample& s);
@@ -57,6 +63,8 @@ class MasterRun {
   void SaveCheckpoint(const RunState& state);
 
   const Options& opts_;
+  std::vector<Input> inputs_;  // what no output may replace
+  Staging staging_;            // the outputs until they are all written
   RunOptions run_;  // opts_.run with the run's hooks
   Scene scene_;
   Camera camera_;

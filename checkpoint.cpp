@@ -6,11 +6,9 @@
 #include <cstdio>
 #include <cstring>
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include "coding.h"
 #include "crypto.h"
+#include "files.h"
 #include "protocol.h"
 
 namespace {
@@ -27,7 +25,12 @@ class In {
   size_t left() const { return r_.left(); }
   uint64_t U64() { return Get(8); }
   uint8_t U8() { return uint8_t(Get(1)); }
-  bool Bool() { return Get(1) != 0; }
+  bool Bool() {
+    const uint64_t v = Get(1);
+    bad_flag_ |= v > 1;
+    return v != 0;
+  }
+  bool bad_flag() const { return bad_flag_; }
   uint32_t U32() { return uint32_t(Get(4)); }
   int32_t I32() { return int32_t(uint32_t(Get(4))); }
   int64_t I64() { return int64_t(Get(8)); }
@@ -61,6 +64,7 @@ class In {
   }
   std::string err_;  // unused: a failure is reported as one
   Reader r_;
+  bool bad_flag_ = false;  // a u8 flag that is neither 0 nor 1
 };
 
 void PutOptions(std::string* w, const SolveOptions& o) {
@@ -109,6 +113,53 @@ template <typename T, typename Put>
 void PutArray(std::string* w, const std::vector<T>& v, Put put) {
   PutFixed64(w, v.size());
   for (const T& x : v) put(x);
+}
+
+// A value that no run writes: "" when there is none, else which. Run once
+// the checksum holds (an edited file re-hashed, or a writer's bug): NaN in
+// the radiosity would otherwise end as nan in result.csv.
+std::string Implausible(const Checkpoint& k) {
+  auto finite = [](const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+  };
+  const SolverState& s = k.solver;
+  if (k.elements > uint64_t(kMaxElements) || k.base_elements > k.elements ||
+      k.patches > k.base_elements || k.edits.size() > k.elements)
+    return "element and patch counts out of range";
+  if (s.b.size() != k.elements || s.unshot.size() != k.patches || s.lit.size() != k.patches ||
+      s.blind.size() != k.patches || s.times_shot.size() != k.patches)
+    return "solver arrays do not match the element and patch counts";
+  for (const glm::dvec3& v : s.b)
+    if (!finite(v)) return "a radiosity that is not a finite number";
+  for (const glm::dvec3& v : s.unshot)
+    if (!finite(v)) return "an unshot radiosity that is not a finite number";
+  if (!finite(s.unshot_sum) || !std::isfinite(s.abs_sum)) return "unshot sums not finite";
+  if (s.shots < 0) return "a negative shot count";
+  for (size_t p = 0; p < k.patches; ++p)
+    if (s.lit[p] > 1 || s.blind[p] > 1 || s.times_shot[p] < 0 || s.times_shot[p] > s.shots)
+      return "patch " + std::to_string(p) + "'s flags or shot count out of range";
+  const RunState& r = k.run;
+  if (r.wave < 1 || r.wave_start < 0 || r.wave_start > s.shots || r.best_at < 0 ||
+      r.best_at > s.shots || std::isnan(r.best) || r.best < 0 || !std::isfinite(r.seconds) ||
+      r.seconds < 0 || r.columns < 0)
+    return "run state out of range";
+  std::vector<bool> seen(k.patches);
+  for (int32_t p : r.pending) {
+    if (p < 0 || uint64_t(p) >= k.patches || seen[size_t(p)])
+      return "pending patch " + std::to_string(p) + " out of range or listed twice";
+    seen[size_t(p)] = true;
+  }
+  if (k.has_subdivider) {
+    const SubdividerState& d = k.subdivider;
+    if (!std::isfinite(d.threshold) || d.threshold <= 0 || d.last_pass < -1 ||
+        d.last_pass > s.shots || d.wave_start_leaves < 0 || d.divided_in_wave < 0 ||
+        d.passes < 0 || !std::isfinite(d.seconds) || d.seconds < 0)
+      return "subdivision state out of range";
+  }
+  // log.csv's rows as LogCsv writes them: numbers, commas, newlines
+  if (k.log.find_first_not_of("0123456789.,-+eEinfa\n") != std::string::npos)
+    return "log rows that are not numbers";
+  return "";
 }
 
 }  // namespace
@@ -348,62 +399,28 @@ bool DecodeCheckpoint(const std::string& bytes, Checkpoint* c, std::string* err)
     *err = "corrupt: the payload does not decode (" + std::to_string(r.left()) + " bytes left)";
     return false;
   }
+  const std::string implausible = r.bad_flag() ? "a flag that is neither 0 nor 1" : Implausible(k);
+  if (!implausible.empty()) {
+    *err = "corrupt: " + implausible + " (the checksum holds: an edited file?)";
+    return false;
+  }
   *c = std::move(k);
   return true;
 }
 
 bool WriteCheckpoint(const std::string& path, const Checkpoint& c, size_t* bytes,
                      std::string* err) {
-  const std::string data = EncodeCheckpoint(c), tmp = path + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    *err = tmp + ": " + std::strerror(errno);
-    return false;
-  }
-  size_t done = 0;
-  while (done < data.size()) {
-    const ssize_t n = ::write(fd, data.data() + done, data.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      *err = tmp + ": " + std::strerror(n < 0 ? errno : EIO);
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      return false;
-    }
-    done += size_t(n);
-  }
   // Synced before the rename: after a crash the name holds the old
   // checkpoint or the whole new one.
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    *err = tmp + ": " + std::strerror(errno);
-    ::unlink(tmp.c_str());
-    return false;
-  }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    *err = path + ": " + std::strerror(errno);
-    ::unlink(tmp.c_str());
-    return false;
-  }
+  const std::string data = EncodeCheckpoint(c);
+  if (!WriteFileAtomic(path, data, err, true)) return false;
   *bytes = data.size();
   return true;
 }
 
 bool ReadCheckpoint(const std::string& path, Checkpoint* c, std::string* err) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) {
-    *err = path + ": " + std::strerror(errno);
-    return false;
-  }
   std::string bytes;
-  char buf[1 << 16];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) bytes.append(buf, n);
-  const bool failed = std::ferror(f);
-  std::fclose(f);
-  if (failed) {
-    *err = path + ": cannot read: " + std::strerror(errno);
-    return false;
-  }
+  if (!ReadInput(path, kMaxCheckpointBytes, &bytes, err)) return false;
   if (!DecodeCheckpoint(bytes, c, err)) {
     *err = path + ": " + *err;
     return false;

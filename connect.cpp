@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <thread>
@@ -19,6 +20,7 @@
 #include "check.h"
 #include "clock.h"
 #include "crypto.h"
+#include "files.h"
 #include "source.h"
 
 namespace {
@@ -30,6 +32,13 @@ constexpr size_t kNonce = 32, kMac = 32;
 constexpr size_t kChallenge = sizeof kMagic + 1 + kNonce;  // master -> worker
 constexpr size_t kResponse = kNonce + kMac;                // worker -> master
 constexpr double kHandshake = 5;  // seconds for a connection to authenticate
+// Connections authenticating at once: more wait in the kernel's backlog,
+// so that anyone who can reach the port cannot use up the descriptors.
+constexpr size_t kMaxPending = 32;
+// After accept() fails for want of descriptors: this long before the next.
+constexpr double kBackOff = 1;
+// Refusals said one a line; past this many, only that more were refused.
+constexpr int kRefusalsSaid = 10;
 
 std::string Nonce() {
   std::string n(kNonce, '\0');
@@ -96,7 +105,9 @@ bool RecvAll(int fd, size_t want, double deadline, std::string* out) {
 
 // Accepts and authenticates on a thread of its own, several connections
 // at a time, so that a slow or hostile client delays nobody. It waits for
-// one worker: the first to join, or kConnectWait without any, settles it.
+// one worker: the first to join the pool (not merely to authenticate: it
+// may be another build, or close at once), or kConnectWait without any,
+// settles it.
 class Listener : public ThreadedSource {
  public:
   Listener(int fd, const std::string& secret, Note note)
@@ -109,6 +120,8 @@ class Listener : public ThreadedSource {
     for (int fd : stop_) ::close(fd);
   }
   void Stop() override;
+  void Joined() override { joined_ = true; }
+  int Expected() const override { return joined_ ? 0 : ThreadedSource::Expected(); }
 
  private:
   struct Pending {
@@ -119,8 +132,11 @@ class Listener : public ThreadedSource {
   void Accept(std::vector<Pending>* pending);
   void Refuse(const Pending& p, const std::string& why) {
     ::close(p.handshake.fd());
+    if (++refused_ > kRefusalsSaid) return;
     Delivery d;
-    d.notes.emplace_back("connect-back from " + p.peer + " refused: " + why, true);
+    d.notes.emplace_back("connect-back from " + p.peer + " refused: " + why +
+                             (refused_ == kRefusalsSaid ? " (further refusals not shown)" : ""),
+                         true);
     Deliver(std::move(d));
   }
 
@@ -129,6 +145,10 @@ class Listener : public ThreadedSource {
   int stop_[2];
   std::thread thread_;
   bool stopped_ = false;
+  int refused_ = 0;
+  double backoff_until_ = 0;  // accept() ran out of descriptors: not before this
+  bool said_backoff_ = false;
+  std::atomic<bool> joined_{false};  // set on the pool's thread, read on this one
 };
 
 void Listener::Accept(std::vector<Pending>* pending) {
@@ -136,7 +156,22 @@ void Listener::Accept(std::vector<Pending>* pending) {
   socklen_t len = sizeof addr;
   const int fd = ::accept4(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len,
                            SOCK_NONBLOCK | SOCK_CLOEXEC);
-  if (fd < 0) return;
+  if (fd < 0) {
+    // The connection stays in the backlog and the socket readable: without
+    // a pause this would spin.
+    if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
+      backoff_until_ = MonotonicSeconds() + kBackOff;
+      if (!said_backoff_) {
+        said_backoff_ = true;
+        Delivery d;
+        d.notes.emplace_back(std::string("connect-back: cannot accept (") + std::strerror(errno) +
+                                 "); trying again every " + std::to_string(int(kBackOff)) + " s",
+                             true);
+        Deliver(std::move(d));
+      }
+    }
+    return;
+  }
   NoDelay(fd);
   Pending p{MasterHandshake(fd, secret_, MonotonicSeconds() + kHandshake),
             AddressName(reinterpret_cast<sockaddr*>(&addr), len)};
@@ -152,7 +187,10 @@ void Listener::Run() {
   bool settled = false;
   std::vector<Pending> pending;
   for (;;) {
-    std::vector<pollfd> fds{{stop_[0], POLLIN, 0}, {listen_fd_, POLLIN, 0}};
+    // The listening socket is left out while the handshakes are full or
+    // descriptors ran out (poll ignores a negative fd).
+    const bool accepting = pending.size() < kMaxPending && MonotonicSeconds() >= backoff_until_;
+    std::vector<pollfd> fds{{stop_[0], POLLIN, 0}, {accepting ? listen_fd_ : -1, POLLIN, 0}};
     for (const Pending& p : pending) fds.push_back({p.handshake.fd(), POLLIN, 0});
     ::poll(fds.data(), fds.size(), 200);
     if (fds[0].revents) break;
@@ -170,13 +208,11 @@ void Listener::Run() {
       } else if (o == MasterHandshake::kJoined) {
         Delivery d;
         d.workers.emplace_back(SocketConn(p.handshake.fd()), "worker at " + p.peer);
-        d.settled = settled ? 0 : 1;
-        settled = true;
         Deliver(std::move(d));
       }
       if (o != MasterHandshake::kWaiting) pending.erase(pending.begin() + long(i));
     }
-    if (!settled && now > give_up) {
+    if (!settled && !joined_ && now > give_up) {
       settled = true;  // said once
       Delivery d;
       d.notes.emplace_back("no worker connected within " + std::to_string(int(kConnectWait)) + " s",
@@ -260,7 +296,9 @@ bool ProveToMaster(int fd, const std::string& secret, const std::string& where, 
 }
 
 bool ReadSecret(const std::string& file, std::string* secret, std::string* err) {
-  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: a FIFO without a writer must not block the open; fstat
+  // refuses it below.
+  const int fd = ::open(file.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
   struct stat st;
   if (fd < 0 || ::fstat(fd, &st) != 0) {
     *err = file + ": " + std::strerror(errno);
@@ -270,7 +308,8 @@ bool ReadSecret(const std::string& file, std::string* secret, std::string* err) 
   std::string text;
   char buf[4096];
   ssize_t n = 0;
-  while (S_ISREG(st.st_mode) && text.size() < (1 << 16) && (n = ::read(fd, buf, sizeof buf)) > 0)
+  const bool readable = S_ISREG(st.st_mode) && uint64_t(st.st_size) <= kMaxSecretBytes;
+  while (readable && text.size() <= kMaxSecretBytes && (n = ::read(fd, buf, sizeof buf)) > 0)
     text.append(buf, size_t(n));
   ::close(fd);
   char mode[8];
@@ -280,8 +319,13 @@ bool ReadSecret(const std::string& file, std::string* secret, std::string* err) 
   } else if (st.st_mode & 077) {
     *err = file + ": the secret may be read or changed by others (mode " + mode +
            "); make it private with: chmod 600 " + file;
+  } else if (st.st_mode & 0100) {
+    *err = file + ": the secret must be mode 0600 or 0400, not " + mode + ": chmod 600 " + file;
   } else if (n < 0) {
     *err = file + ": " + std::strerror(errno);
+  } else if (!readable || text.size() > kMaxSecretBytes) {
+    *err = file + ": more than the limit of " + std::to_string(kMaxSecretBytes >> 10) +
+           " KiB for a secret";
   } else {
     text.erase(text.find_last_not_of(" \t\r\n") + 1);
     if (text.size() >= 16) {

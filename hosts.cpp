@@ -3,8 +3,9 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
-#include <fstream>
 #include <sstream>
+
+#include "files.h"
 
 namespace {
 
@@ -142,6 +143,7 @@ bool ParseHosts(const std::string& text, const std::string& file, std::vector<Ho
                 std::string* err) {
   std::istringstream in(text);
   std::string line;
+  long total = 0;
   for (int n = 1; std::getline(in, line); ++n) {
     const size_t hash = line.find('#');
     if (hash != std::string::npos) line.resize(hash);
@@ -158,20 +160,21 @@ bool ParseHosts(const std::string& text, const std::string& file, std::vector<Ho
       *err = file + ":" + std::to_string(n) + ": " + why;
       return false;
     }
+    total += h.slots;
+    if (total > kMaxTotalSlots) {
+      *err = file + ":" + std::to_string(n) + ": more than " + std::to_string(kMaxTotalSlots) +
+             " slots in all";
+      return false;
+    }
     hosts->push_back(h);
   }
   return true;
 }
 
 bool ReadHosts(const std::string& file, std::vector<HostSpec>* hosts, std::string* err) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) {
-    *err = file + ": " + std::strerror(errno);
-    return false;
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!ParseHosts(text.str(), file, hosts, err)) return false;
+  std::string text;
+  if (!ReadInput(file, kMaxHostsBytes, &text, err)) return false;
+  if (!ParseHosts(text, file, hosts, err)) return false;
   if (hosts->empty()) {
     *err = file + ": lists no host";
     return false;

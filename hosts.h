@@ -35,6 +35,9 @@ struct HostSpec {
 };
 
 constexpr int kMaxSlots = 256;
+// Slots of one hosts file in all: each is a worker process and a
+// connection of the master's.
+constexpr int kMaxTotalSlots = 4096;
 
 // Parses the text of a hosts file; `file` names it in messages. False with
 // *err = "FILE:LINE: what" at the first error.

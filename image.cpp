@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "check.h"
+#include "files.h"
 
 namespace {
 
@@ -205,27 +206,6 @@ std::string JsonString(const std::string& s) {
   return out;
 }
 
-// Writes the whole file or nothing is left behind: "PATH: strerror".
-bool WriteFile(const std::string& path, const void* data, size_t size,
-               std::string* err) {
-  FILE* f = std::fopen(path.c_str(), "wb");
-  if (!f) {
-    *err = path + ": " + std::strerror(errno);
-    return false;
-  }
-  bool ok = std::fwrite(data, 1, size, f) == size;
-  int e = errno;
-  if (std::fclose(f) != 0 && ok) {
-    ok = false;
-    e = errno;
-  }
-  if (!ok) {
-    *err = path + ": " + std::strerror(e);
-    std::remove(path.c_str());
-  }
-  return ok;
-}
-
 void AppendBytes(void* context, void* data, int size) {
   static_cast<std::string*>(context)->append(static_cast<const char*>(data), size_t(size));
 }
@@ -398,7 +378,7 @@ bool WriteImage(const Image& img, float exposure, const std::string& path,
     bytes = "P6\n" + std::to_string(img.width) + " " + std::to_string(img.height) + "\n255\n";
     bytes.append(reinterpret_cast<const char*>(rgb.data()), rgb.size());
   }
-  return WriteFile(path, bytes.data(), bytes.size(), err);
+  return WriteFileAtomic(path, bytes, err);
 }
 
 bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
@@ -428,7 +408,7 @@ bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
       std::snprintf(line, sizeof line, "4 %d %d %d %d\n", q[0], q[1], q[2], q[3]);
     s += line;
   }
-  return WriteFile(path, s.data(), s.size(), err);
+  return WriteFileAtomic(path, s, err);
 }
 
 bool WriteGltf(const ShadedMesh& mesh, float exposure, const std::string& gltf_path,
@@ -495,6 +475,5 @@ bool WriteGltf(const ShadedMesh& mesh, float exposure, const std::string& gltf_p
       idx_bytes, n, double(lo[0]), double(lo[1]), double(lo[2]), double(hi[0]), double(hi[1]),
       double(hi[2]), n, idx.size());
   const std::string json = buf;
-  return WriteFile(bin_path, bin.data(), bin.size(), err) &&
-         WriteFile(gltf_path, json.data(), json.size(), err);
+  return WriteFileAtomic(bin_path, std::string(bin.begin(), bin.end()), err) && WriteFileAtomic(gltf_path, json, err);
 }

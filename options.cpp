@@ -91,7 +91,8 @@ const char kUsage[] =
     "  -j, --workers N        local worker processes (default: online cores);\n"
     "                         0: the master computes form factors itself\n"
     "      --queue N          patches queued per worker (default: automatic, 3-10)\n"
-    "      --timeout SEC      drop a worker silent this long (default 10)\n"
+    "      --timeout SEC      drop a worker silent, or given work and sending no\n"
+    "                         column, this long (default 10)\n"
     "      --worker-cmd CMD   start local workers with CMD --worker\n"
     "  -H, --hosts FILE       also start workers on the hosts in FILE (ssh);\n"
     "                         -j then defaults to 0\n"
@@ -99,7 +100,7 @@ const char kUsage[] =
     "      --accept-new-host-keys  record unknown ssh host keys (default: refuse)\n"
     "      --listen [HOST:]PORT  take workers that connect back (--secret);\n"
     "                         -j then defaults to 0\n"
-    "      --secret FILE      shared secret of --listen and --connect (mode 0600)\n"
+    "      --secret FILE      shared secret of --listen and --connect (mode 0600 or 0400)\n"
     "  -r, --resolution R     hemicube pixels across the top face (default 256)\n"
     "  -e, --epsilon E        stop when unshot energy < E x emitted (default 1e-3)\n"
     "  -s, --shots N          stop after N shots\n"
@@ -120,7 +121,7 @@ const char kUsage[] =
     "      --seed N           seed of the hemicube turns (default 1)\n"
     "      --log-every N      shots between log.csv rows (default: patches / 100)\n"
     "      --checkpoint FILE  save the run's state in FILE every --checkpoint-every\n"
-    "                         seconds and when it stops (written to FILE.tmp, renamed)\n"
+    "                         seconds and when it stops (written beside it, renamed)\n"
     "      --checkpoint-every SEC  seconds between checkpoints (default 30)\n"
     "      --resume FILE      go on from checkpoint FILE (same scene and options;\n"
     "                         -e, -s, -t and the output may differ)\n"
@@ -189,12 +190,25 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   Options& o = *opts;
   o.workers = std::max(1L, sysconf(_SC_NPROCESSORS_ONLN));
   bool epsilon_given = false, worker_mode = false, workers_given = false, dump_hosts = false;
-  std::string secret_file;
+  // Given on the command line: options that contradict others.
+  bool quiet = false, verbose = false, no_subdivide = false, no_waves = false;
+  bool wave_fraction = false;
+  std::string subdivide_limit;  // the last of --subdivide-floor, --min-element, --max-level
+  std::string& secret_file = o.secret_file;
   opterr = 0;
   optind = 0;  // glibc: start afresh, so that a second call parses its own argv
   int c;
   while ((c = getopt_long(argc, argv, ":o:j:H:r:e:s:t:qvh", kLong, nullptr)) != -1) {
     bool ok = true;
+    // A name given empty would be ignored or misread: say so.
+    if (optarg && !*optarg && (c == 'o' || c == 'H' || c == kWorkerCmd || c == kListen ||
+                               c == kSecret || c == kConnect || c == kReference ||
+                               c == kConverge || c == kCheckpoint || c == kResume || c == kCamera)) {
+      const option* o = kLong;
+      while (o->name && o->val != c) ++o;
+      BadOption(("--" + std::string(o->name)).c_str(), "", "needs a name, not an empty string", err);
+      return Parsed::kError;
+    }
     switch (c) {
       case 'o': o.out_dir = optarg; break;
       case 'j':
@@ -230,15 +244,23 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       case kElements:
         ok = Integer("--elements", optarg, 1, 64, &o.mesh.elements_per_patch, err);
         break;
-      case kNoSubdivide: o.subdivide = false; break;
-      case kNoWaves: o.sub.waves = false; break;
-      case kFloor: ok = Number("--subdivide-floor", optarg, 1e-3, 100, &o.sub.floor, err); break;
+      case kNoSubdivide: o.subdivide = false; no_subdivide = true; break;
+      case kNoWaves: o.sub.waves = false; no_waves = true; break;
+      case kFloor:
+        ok = Number("--subdivide-floor", optarg, 1e-3, 100, &o.sub.floor, err);
+        subdivide_limit = "--subdivide-floor";
+        break;
       case kMinElement:
         ok = Number("--min-element", optarg, 1e-300, 1e300, &o.sub.min_size, err);
+        subdivide_limit = "--min-element";
         break;
-      case kMaxLevel: ok = Integer("--max-level", optarg, 0, 12, &o.sub.max_level, err); break;
+      case kMaxLevel:
+        ok = Integer("--max-level", optarg, 0, 12, &o.sub.max_level, err);
+        subdivide_limit = "--max-level";
+        break;
       case kWaveFraction:
         ok = Number("--wave-fraction", optarg, 0.01, 1, &o.sub.wave_fraction, err);
+        wave_fraction = true;
         break;
       case kNoRotate: o.run.rotate = false; break;
       case kSeed: ok = Integer("--seed", optarg, 0, 0xFFFFFFFFL, &o.run.seed, err); break;
@@ -255,8 +277,8 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
         if (o.format != "png" && o.format != "ppm")
           ok = BadOption("--format", optarg, "must be png or ppm", err);
         break;
-      case 'q': o.verbosity = 0; break;
-      case 'v': o.verbosity = 2; break;
+      case 'q': o.verbosity = 0; quiet = true; break;
+      case 'v': o.verbosity = 2; verbose = true; break;
       case kVersion: return Parsed::kVersion;
       case 'h': return Parsed::kHelp;
       case ':':
@@ -267,6 +289,18 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
         return Parsed::kError;
     }
     if (!ok) return Parsed::kError;
+  }
+  // Options that contradict each other: one of them would be ignored.
+  std::string clash;
+  if (quiet && verbose) clash = "-q and -v contradict each other";
+  else if (no_subdivide && !subdivide_limit.empty())
+    clash = subdivide_limit + " limits dividing, and --no-subdivide divides nothing";
+  else if (wave_fraction && (no_subdivide || no_waves))
+    clash = "--wave-fraction starts waves, and " +
+            std::string(no_subdivide ? "--no-subdivide" : "--no-waves") + " has none";
+  if (!clash.empty()) {
+    *err = clash + " (try 'radiosity --help')";
+    return Parsed::kError;
   }
   // Connect-back: the secret is read before anything else, so that a
   // file others can read stops the run before it starts.
@@ -314,7 +348,21 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   }
   // Remote workers take the place of local ones unless -j says otherwise.
   if (o.Remote() && !workers_given) o.workers = 0;
+  if (optind < argc - 1) {
+    *err = "one scene at a time, got " + std::to_string(argc - optind) + ": " + argv[optind] +
+           " " + argv[optind + 1] + (argc - optind > 2 ? " ..." : "") + " (try 'radiosity --help')";
+    return Parsed::kError;
+  }
   if (optind != argc - 1) return Parsed::kNoScene;
+  // Local workers: -j and the hosts file's localhost lines, within -j's cap.
+  long local = o.workers;
+  for (const HostSpec& h : o.hosts) local += h.Local() ? h.slots : 0;
+  if (local > kMaxLocalWorkers) {
+    *err = "-j " + std::to_string(o.workers) + " and the localhost slots of " + o.hosts_file +
+           " make " + std::to_string(local) + " local workers, more than " +
+           std::to_string(kMaxLocalWorkers);
+    return Parsed::kError;
+  }
   o.scene_path = argv[optind];
   if (!o.converge.empty() && !epsilon_given) o.run.epsilon = kConvergeEpsilon;
   // Dividing never asks less than its floor.

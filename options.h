@@ -42,7 +42,7 @@ struct Options {
   int listen_port = 0;
   std::string connect, connect_host;
   int connect_port = 0;
-  std::string secret;  // the contents of --secret FILE
+  std::string secret_file, secret;  // --secret FILE and its contents
   // Workers from -H or --listen, beside or instead of the -j local ones.
   bool Remote() const { return !hosts.empty() || !listen.empty(); }
 
@@ -57,7 +57,7 @@ enum class Parsed {
   kVersion,    // print the version
   kDumpHosts,  // print opts->hosts
   kWorker,     // speak the worker protocol (on opts->connect_host if set)
-  kNoScene,    // no scene or more than one: print kUsage on stderr
+  kNoScene,    // no scene: print kUsage on stderr
   kError,      // bad usage or input: *err is the line to print
 };
 

@@ -1,5 +1,6 @@
 #include "pool.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <cstring>
@@ -133,13 +134,15 @@ WorkerPool::WorkerPool(proto::SceneSetup setup, const Mesh& mesh,
 
 WorkerPool::~WorkerPool() { Shutdown(); }
 
-double WorkerPool::Now() { return clock_->Now() - epoch_; }
+double WorkerPool::Clk() const { return clock_->Now() - epoch_; }
+
+double WorkerPool::Now() { return joined_at_ < 0 ? 0 : Clk() - joined_at_; }
 
 void WorkerPool::Add(std::unique_ptr<Conn> conn, const std::string& name) {
   Worker w;
   w.name = name;
   w.conn = std::move(conn);
-  w.started = w.last_heard = w.last_sent = Now();
+  w.started = w.last_heard = w.last_sent = Clk();
   w.out = scene_frame_;
   // A worker that joins late (or replaces a lost one) gets the hierarchy
   // as it is now: every edit so far, in order, right after the scene.
@@ -161,6 +164,7 @@ int WorkerPool::Starting() const {
 void WorkerPool::Assign(int w, const proto::Assignment& a) {
   Worker& wk = workers_[w];
   CHECK(wk.state == State::kJoined);
+  if (wk.owed++ == 0) wk.progress = Clk();
   proto::EncodeWork({a}, &wk.out);
 }
 
@@ -192,7 +196,7 @@ void WorkerPool::Flush(int w, std::vector<WorkerEvent>* events) {
     }
     wk.out_pos += size_t(n);
     sent_ += uint64_t(n);
-    wk.last_sent = Now();
+    wk.last_sent = Clk();
   }
   if (wk.out_pos == wk.out.size()) {
     wk.out.clear();
@@ -242,7 +246,9 @@ bool WorkerPool::Handle(int w, proto::Msg type, const std::string& payload,
         return false;
       }
       wk.state = State::kJoined;
+      if (joined_at_ < 0) joined_at_ = Clk();
       events->push_back({WorkerEvent::kJoined, w, {}, ""});
+      for (const auto& s : sources_) s->Joined();
       return true;
     }
     case State::kJoined: {
@@ -258,6 +264,8 @@ bool WorkerPool::Handle(int w, proto::Msg type, const std::string& payload,
         *why = "sent a column out of the mesh's range";
         return false;
       }
+      wk.owed = std::max(0L, wk.owed - 1);
+      wk.progress = Clk();
       events->push_back(std::move(ev));
       return true;
     }
@@ -277,7 +285,7 @@ void WorkerPool::Receive(int w, std::vector<WorkerEvent>* events) {
     if (n < 0) { Lose(w, std::string("cannot read: ") + std::strerror(errno), events, true); return; }
     if (n == 0) { Lose(w, "closed the connection", events, true); return; }
     received_ += uint64_t(n);
-    wk.last_heard = Now();
+    wk.last_heard = Clk();
     wk.in.Append(buf, size_t(n));
     proto::Msg type;
     std::string payload, err;
@@ -297,7 +305,7 @@ void WorkerPool::Receive(int w, std::vector<WorkerEvent>* events) {
 
 void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
   const size_t before = events->size();
-  double now = Now();
+  double now = Clk();
   for (size_t w = 0; w < workers_.size(); ++w) {
     Worker& wk = workers_[w];
     if (wk.state == State::kLost) continue;
@@ -337,14 +345,27 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
   const double wait = std::min(timeout, opts_.heartbeat_s / 2);
   int n = ::poll(fds.data(), fds.size(), int(std::max(0.0, wait) * 1000));
   for (int w : buffered) Receive(w, events);
-  if (n <= 0) return;
-  for (size_t i = 0; i < nworkers; ++i) {
-    if (fds[i].revents & POLLOUT) Flush(who[i], events);
-    if (workers_[who[i]].state != State::kLost && (fds[i].revents & (POLLIN | POLLHUP | POLLERR)))
-      Receive(who[i], events);
+  if (n > 0) {
+    for (size_t i = 0; i < nworkers; ++i) {
+      if (fds[i].revents & POLLOUT) Flush(who[i], events);
+      if (workers_[who[i]].state != State::kLost && (fds[i].revents & (POLLIN | POLLHUP | POLLERR)))
+        Receive(who[i], events);
+    }
+    for (size_t i = nworkers; i < fds.size(); ++i)
+      if (fds[i].revents) sources_[i - nworkers]->Take(this);
   }
-  for (size_t i = nworkers; i < fds.size(); ++i)
-    if (fds[i].revents) sources_[i - nworkers]->Take(this);
+  // Progress is judged after reading, so that a column that came while
+  // the master was busy elsewhere (a picture, a division pass) counts.
+  now = Clk();
+  for (size_t w = 0; w < workers_.size(); ++w) {
+    const Worker& wk = workers_[w];
+    if (wk.state == State::kJoined && wk.owed > 0 && now - wk.progress > opts_.timeout_s) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "no column in %.1f s though given work (heartbeats only)",
+                    now - wk.progress);
+      Lose(int(w), buf, events);
+    }
+  }
 }
 
 void WorkerPool::Shutdown() {

@@ -56,7 +56,7 @@ std::string SelfExe();
 
 struct PoolOptions {
   double heartbeat_s = 1.0;  // send a heartbeat after this much silence
-  double timeout_s = 10.0;   // drop a worker silent for this long
+  double timeout_s = 10.0;   // drop a worker silent, or given work and no column, this long
   double hello_s = 30.0;     // deadline for hello + mesh build
 };
 
@@ -76,6 +76,8 @@ class WorkerSource {
   virtual int Expected() const = 0;
   // No more workers: stop the threads, close the sockets.
   virtual void Stop() = 0;
+  // A worker of the pool (of any source) has joined.
+  virtual void Joined() {}
 };
 
 // Workers behind Conns, driven by poll(2) with non-blocking I/O: the
@@ -102,6 +104,9 @@ class WorkerPool : public Transport {
   void Assign(int w, const proto::Assignment& a) override;
   void Divide(const std::vector<int32_t>& elems) override;
   void Poll(double timeout, std::vector<WorkerEvent>* events) override;
+  // The run's clock: 0 until the first worker joins, so that waiting for
+  // workers (connect-back, ssh set-up, start-up) does not count against
+  // -t; the deadlines go by the pool's own clock.
   double Now() override;
   uint64_t BytesSent() const override { return sent_; }
   uint64_t BytesReceived() const override { return received_; }
@@ -117,6 +122,11 @@ class WorkerPool : public Transport {
     std::string out;        // encoded frames not yet written
     size_t out_pos = 0;
     double last_heard = 0, last_sent = 0, started = 0;
+    // Patches given and not answered with a column, and when the last
+    // column came (or the first of them was given): heartbeats say a
+    // worker lives, columns that it works.
+    long owed = 0;
+    double progress = 0;
   };
   // ended: the worker closed its end (so it is exiting: wait for its
   // status); otherwise it is killed.
@@ -127,6 +137,7 @@ class WorkerPool : public Transport {
   bool Handle(int w, proto::Msg type, const std::string& payload,
               std::vector<WorkerEvent>* events, std::string* why);
   void Queue(int w, double now);
+  double Clk() const;  // seconds since the pool was made
 
   const Mesh& mesh_;
   std::string scene_frame_;  // encoded once, sent to every worker
@@ -138,6 +149,7 @@ class WorkerPool : public Transport {
   std::vector<std::unique_ptr<WorkerSource>> sources_;
   uint64_t sent_ = 0, received_ = 0;
   double epoch_;
+  double joined_at_ = -1;  // Clk() when the first worker joined
 };
 
 #endif

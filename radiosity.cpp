@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
     case Parsed::kDumpHosts: return DumpHosts(opts);
     case Parsed::kWorker: return WorkerMain(opts);
     case Parsed::kNoScene: std::fputs(kUsage, stderr); return kExitUsage;
-    case Parsed::kError: std::fprintf(stderr, "radiosity: %s\n", err.c_str()); return kExitUsage;
+    case Parsed::kError: std::fprintf(stderr, "radiosity: %s\n", Printable(err).c_str()); return kExitUsage;
   }
   MasterRun run(opts);
   run.Build();

@@ -1,15 +1,18 @@
 #include "results.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <cstdlib>
-#include <fstream>
 #include <sstream>
 #include <unordered_map>
 
 #include "check.h"
+#include "files.h"
 
 std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   std::vector<glm::dvec3> sum(mesh.faces.size(), glm::dvec3(0.0));
@@ -64,32 +67,22 @@ bool CsvSplit(const std::string& line, std::vector<std::string>* cols) {
 
 bool WriteResultCsv(const std::string& path, const Scene& scene,
                     const std::vector<glm::dvec3>& face_b, std::string* err) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) {
-    *err = path + ": " + std::strerror(errno);
-    return false;
-  }
-  std::fprintf(f, "face,object,area,B_r,B_g,B_b\n");
+  std::string text = "face,object,area,B_r,B_g,B_b\n";
+  char buf[128];
   for (size_t i = 0; i < scene.faces.size(); ++i) {
     const Face& fc = scene.faces[i];
-    std::fprintf(f, "%d,%s,%.9g,%.9g,%.9g,%.9g\n", fc.index,
-                 CsvField(scene.objects[fc.object]).c_str(), fc.area, face_b[i].r, face_b[i].g,
-                 face_b[i].b);
+    std::snprintf(buf, sizeof buf, ",%.9g,%.9g,%.9g,%.9g\n", fc.area, face_b[i].r, face_b[i].g,
+                  face_b[i].b);
+    text += std::to_string(fc.index) + "," + CsvField(scene.objects[fc.object]) + buf;
   }
-  if (std::fclose(f) != 0) {
-    *err = path + ": " + std::strerror(errno);
-    return false;
-  }
-  return true;
+  return WriteFileAtomic(path, text, err);
 }
 
 bool ReadReference(const std::string& path, const Scene& scene,
                    std::vector<glm::dvec3>* ref, std::string* err) {
-  std::ifstream in(path);
-  if (!in) {
-    *err = path + ": cannot open: " + std::strerror(errno);
-    return false;
-  }
+  std::string text;
+  if (!ReadInput(path, kMaxReferenceBytes, &text, err)) return false;
+  std::istringstream in(text);
   ref->assign(scene.faces.size(), glm::dvec3(0.0));
   std::string line;
   int lineno = 0;
@@ -154,8 +147,11 @@ LogCsv::~LogCsv() {
 
 bool LogCsv::Open(const std::string& path, std::string* err) {
   path_ = path;
-  f_ = std::fopen(path.c_str(), "w");
+  // A new file (in the run's own directory, Staging): never one planted there.
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+  f_ = fd < 0 ? nullptr : ::fdopen(fd, "w");
   if (!f_) {
+    if (fd >= 0) ::close(fd);
     *err = path + ": " + std::strerror(errno);
     return false;
   }

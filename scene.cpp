@@ -19,6 +19,8 @@
 #include <string_view>
 #include <utility>
 
+#include "files.h"
+
 namespace {
 
 // Far beyond any scene this program can solve, but small enough that the
@@ -29,6 +31,10 @@ namespace {
 constexpr long kMaxVertices = 32000000;
 constexpr long kMaxFaces = 8000000;
 constexpr long kMaxCorners = 64000000;
+// A polygon's vertices: the mesh cuts a face along its outline, so one
+// polygon of 10,000 vertices would become over a million elements.
+constexpr size_t kMaxPolygon = 1000;
+constexpr double kMaxKe = 1e30;
 constexpr size_t kMaxLine = size_t{256} << 20;
 
 // Planarity: the largest distance of a vertex from the face's plane may be
@@ -222,8 +228,10 @@ class Loader {
 
 bool Loader::LoadObj(const std::string& path) {
   s_.path = path;
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) return FailFile(path, std::string("cannot open: ") + std::strerror(errno));
+  s_.files.push_back(path);
+  std::string why;
+  std::FILE* f = OpenInputFile(path, kMaxSceneBytes, &why);
+  if (!f) return FailFile(path, "cannot open: " + why);
   LineReader reader(f);
   std::string line;
   long ln = 0;
@@ -326,6 +334,9 @@ bool Loader::FaceLine(const std::string& path, long ln, const std::vector<std::s
     return Fail(path, ln, "f: too many face vertices in all (the limit is " +
                               std::to_string(kMaxCorners) + ")");
   }
+  if (t.size() - 1 > kMaxPolygon)
+    return Fail(path, ln, "f: a polygon of " + std::to_string(t.size() - 1) +
+                              " vertices (the limit is " + std::to_string(kMaxPolygon) + ")");
   Face face;
   const long n = static_cast<long>(verts_.size());
   for (size_t i = 1; i < t.size(); ++i) {
@@ -374,6 +385,8 @@ bool Loader::FaceLine(const std::string& path, long ln, const std::vector<std::s
   const double magnitude = glm::length(glm::max(glm::abs(lo), glm::abs(hi)));
   const glm::dvec3 newell = AreaVector(face.verts);
   face.area = glm::length(newell);
+  if (!std::isfinite(face.area) || !std::isfinite(extent * extent))
+    return Fail(path, ln, "f: face too large: its area is not a finite number");
   if (!(face.area > kZeroArea * extent * extent)) {
     if (warnings_) warnings_->push_back(Where(path, ln) + "zero-area face skipped");
     ++skipped_;
@@ -407,10 +420,10 @@ bool Loader::Mtllib(const std::string& obj, long ln, const std::vector<std::stri
   for (size_t i = 1; i < t.size(); ++i) {
     std::string path = t[i][0] == '/' ? std::string(t[i]) : dir + std::string(t[i]);
     if (!mtl_loaded_.insert(path).second) continue;  // named twice: same materials
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (!f) {
-      return Fail(obj, ln, "mtllib: cannot open " + Quote(path) + ": " + std::strerror(errno));
-    }
+    std::string why;
+    std::FILE* f = OpenInputFile(path, kMaxMtlBytes, &why);
+    if (!f) return Fail(obj, ln, "mtllib: cannot open " + Quote(path) + ": " + why);
+    s_.files.push_back(path);
     bool ok = LoadMtl(path, f, obj, ln);
     std::fclose(f);
     if (!ok) return false;
@@ -471,6 +484,9 @@ std::string Loader::MtlStatement(const std::string& raw, int* m) {
       return kw + ": " + Quote(t[i]) + " is outside [0, 1]";
     }
     if (kw == "Ke" && c[i - 1] < 0) return kw + ": " + Quote(t[i]) + " is negative";
+    // Far above any light, and below where power (Ke x area) and its sums overflow.
+    if (kw == "Ke" && c[i - 1] > kMaxKe)
+      return kw + ": " + Quote(t[i]) + " is too large (at most " + Num(kMaxKe) + ")";
   }
   glm::dvec3 v = t.size() == 2 ? glm::dvec3(c[0]) : glm::dvec3(c[0], c[1], c[2]);
   Material& mat = s_.materials[static_cast<size_t>(*m)];

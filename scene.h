@@ -34,6 +34,7 @@ struct Face {
 
 struct Scene {
   std::string path;
+  std::vector<std::string> files;        // the OBJ and each MTL read
   std::vector<Face> faces;               // accepted faces in file order
   std::vector<Material> materials;       // [0] is the default (Kd 0.5, Ke 0)
   std::vector<std::string> objects;      // [0] is "default"

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cstring>
 
+#include "files.h"
+
 namespace {
 
 constexpr double kWidth = 720, kHeight = 440;
@@ -95,12 +97,7 @@ std::string LegendEntry(int i, const std::string& name, const std::string& mark)
 }
 
 bool Save(const std::string& path, const std::string& svg, std::string* err) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f || std::fwrite(svg.data(), 1, svg.size(), f) != svg.size() || std::fclose(f) != 0) {
-    *err = path + ": " + std::strerror(errno);
-    return false;
-  }
-  return true;
+  return WriteFileAtomic(path, svg, err);
 }
 
 }  // namespace

@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.." || exit 1
 secs=${1:-60}
 B=build/fuzz
 status=0
-for t in scene hosts protocol; do
+for t in scene hosts protocol checkpoint; do
   bin=$B/${t}_fuzz
   [ -x "$bin" ] || { echo "fuzz: $bin is missing (make fuzz-build)"; exit 1; }
   mkdir -p "$B/corpus/$t" "$B/artifacts"

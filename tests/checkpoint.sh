@@ -121,7 +121,7 @@ refused "other options" 2 "^radiosity: $ck: made with other options: --resolutio
   -j 0 -r 64 --resume "$ck" "$ROOM"
 refused "missing checkpoint" 2 "^radiosity: $T/none.ck: No such file or directory$" \
   -j 0 "${ARGS[@]}" --resume "$T/none.ck" "$ROOM"
-refused "unwritable --checkpoint" 1 "^radiosity: --checkpoint: $T/no/dir/ck.tmp: No such file or directory$" \
+refused "unwritable --checkpoint" 1 "^radiosity: --checkpoint $T/no/dir/ck: cannot create a file in $T/no/dir: No such file or directory$" \
   -j 0 "${ARGS[@]}" --checkpoint "$T/no/dir/ck" "$ROOM"
 
 finish

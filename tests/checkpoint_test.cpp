@@ -7,11 +7,14 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <random>
 
 #include <gtest/gtest.h>
 
 #include "mesh.h"
+#include "temp_dir.h"
 #include "test_util.h"
 #include "wire_util.h"
 
@@ -95,6 +98,15 @@ Checkpoint Filled() {
   return c;
 }
 
+// Filled() (whose bytes format 1 pins) with values a run could write,
+// which DecodeCheckpoint checks: a B per element, counts within the shots.
+Checkpoint Plausible() {
+  Checkpoint c = Filled();
+  c.solver.b.resize(c.elements, glm::dvec3(0.125));
+  c.solver.shots = 40;
+  return c;
+}
+
 std::string Error(const std::string& bytes) {
   Checkpoint c;
   std::string err;
@@ -103,7 +115,7 @@ std::string Error(const std::string& bytes) {
 }
 
 TEST(Checkpoint, RoundTrip) {
-  const Checkpoint a = Filled();
+  const Checkpoint a = Plausible();
   const std::string bytes = EncodeCheckpoint(a);
   EXPECT_EQ(bytes.substr(0, 8), "RADCKPT\n");
   Checkpoint b;
@@ -174,6 +186,42 @@ TEST(Checkpoint, ForeignAndOtherVersionsAreRefused) {
   EXPECT_EQ(Error(v2), "checkpoint format version 2, this radiosity reads 1");
 }
 
+// An edited checkpoint, re-hashed so that its checksum holds: values no
+// run writes are refused, each with its reason.
+TEST(Checkpoint, ValuesAreCheckedAfterTheChecksum) {
+  ASSERT_EQ(Error(EncodeCheckpoint(Filled())),
+            "corrupt: solver arrays do not match the element and patch counts (the checksum "
+            "holds: an edited file?)");
+  struct Case {
+    const char* why;
+    void (*edit)(Checkpoint*);
+  };
+  const Case cases[] = {
+      {"a radiosity that is not a finite number", [](Checkpoint* c) { c->solver.b[3].g = NAN; }},
+      {"a radiosity that is not a finite number", [](Checkpoint* c) { c->solver.b[0].r = HUGE_VAL; }},
+      {"an unshot radiosity that is not a finite number",
+       [](Checkpoint* c) { c->solver.unshot[1].b = -HUGE_VAL; }},
+      {"unshot sums not finite", [](Checkpoint* c) { c->solver.abs_sum = NAN; }},
+      {"a negative shot count", [](Checkpoint* c) { c->solver.shots = -1; }},
+      {"patch 2's flags or shot count out of range", [](Checkpoint* c) { c->solver.lit[2] = 7; }},
+      {"patch 0's flags or shot count out of range", [](Checkpoint* c) { c->solver.times_shot[0] = 41; }},
+      {"run state out of range", [](Checkpoint* c) { c->run.wave = 0; }},
+      {"run state out of range", [](Checkpoint* c) { c->run.seconds = NAN; }},
+      {"run state out of range", [](Checkpoint* c) { c->run.best = NAN; }},
+      {"pending patch 3 out of range or listed twice", [](Checkpoint* c) { c->run.pending = {3}; }},
+      {"pending patch 1 out of range or listed twice", [](Checkpoint* c) { c->run.pending = {1, 1}; }},
+      {"subdivision state out of range", [](Checkpoint* c) { c->subdivider.seconds = -1; }},
+      {"element and patch counts out of range", [](Checkpoint* c) { c->elements = 1u << 30; }},
+      {"log rows that are not numbers", [](Checkpoint* c) { c->log = "\x1b[2J\n"; }},
+  };
+  for (const Case& k : cases) {
+    Checkpoint c = Plausible();
+    k.edit(&c);
+    EXPECT_EQ(Error(EncodeCheckpoint(c)),
+              std::string("corrupt: ") + k.why + " (the checksum holds: an edited file?)");
+  }
+}
+
 TEST(Checkpoint, OptionsAreCompared) {
   SolveOptions a, b;
   EXPECT_EQ(CompareOptions(a, b), "");
@@ -198,18 +246,40 @@ TEST(Checkpoint, FileIsWrittenAtomicallyAndReadBack) {
   const std::string path = std::string(dir) + "/ck";
   size_t bytes = 0;
   std::string err;
-  ASSERT_TRUE(WriteCheckpoint(path, Filled(), &bytes, &err)) << err;
-  EXPECT_EQ(bytes, EncodeCheckpoint(Filled()).size());
-  EXPECT_NE(access((path + ".tmp").c_str(), F_OK), 0);  // renamed
+  ASSERT_TRUE(WriteCheckpoint(path, Plausible(), &bytes, &err)) << err;
+  EXPECT_EQ(bytes, EncodeCheckpoint(Plausible()).size());
+  EXPECT_NE(access((path + ".tmp").c_str(), F_OK), 0);  // renamed, nothing left beside it
   Checkpoint c;
   ASSERT_TRUE(ReadCheckpoint(path, &c, &err)) << err;
   EXPECT_EQ(c.edits, Filled().edits);
   EXPECT_FALSE(ReadCheckpoint(std::string(dir) + "/none", &c, &err));
   EXPECT_EQ(err, std::string(dir) + "/none: No such file or directory");
   EXPECT_FALSE(WriteCheckpoint(std::string(dir) + "/no/such/dir", Filled(), &bytes, &err));
-  EXPECT_EQ(err, std::string(dir) + "/no/such/dir.tmp: No such file or directory");
+  EXPECT_EQ(err, std::string(dir) + "/no/such/dir: cannot create a file in " + dir +
+                     "/no/such: No such file or directory");
   std::remove(path.c_str());
-  rmdir(dir);
+  rmdir(dir);  // fails if a temporary was left beside the checkpoint
+  EXPECT_NE(access(dir, F_OK), 0);
+}
+
+// A link planted where the old format wrote its temporary (FILE.tmp), or
+// at FILE itself, never makes the checkpoint replace what it points to.
+TEST(Checkpoint, PlantedLinksAreNotFollowed) {
+  TempDir dir;
+  const std::string victim = dir.Write("victim", "precious"), path = dir.path() + "/ck";
+  ASSERT_EQ(symlink(victim.c_str(), (path + ".tmp").c_str()), 0);
+  size_t bytes = 0;
+  std::string err;
+  ASSERT_TRUE(WriteCheckpoint(path, Filled(), &bytes, &err)) << err;
+  std::ifstream in(victim);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, "precious");
+  const std::string link = dir.path() + "/link";
+  ASSERT_EQ(symlink(victim.c_str(), link.c_str()), 0);
+  EXPECT_FALSE(WriteCheckpoint(link, Filled(), &bytes, &err));
+  EXPECT_EQ(err, link + ": is a symbolic link; not replaced");
+  EXPECT_FALSE(WriteCheckpoint("/dev/null", Filled(), &bytes, &err));
+  EXPECT_EQ(err, "/dev/null: is not a regular file; not replaced");
 }
 
 TEST(Checkpoint, DivideHistoryReplaysToTheSameMesh) {

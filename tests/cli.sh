@@ -115,12 +115,24 @@ done
 # Two signals sent back to back can merge into one pending signal, so the
 # second comes once the first has stopped the run: result.csv is written,
 # and the large picture after it (seconds of work) is being made.
+# The directory holds an earlier run's outputs: the interrupted run must
+# leave them all as they were, not some of its own beside them (its
+# outputs wait in a private directory until all are written).
+run_rad "$T/twice" -j 0 -r 32 -s 20 "$SCENES/cornell.obj"
+cp "$T/twice/result.csv" "$T/prev-result.csv"; cp "$T/twice/log.csv" "$T/prev-log.csv"
+staged() { compgen -G "$T/twice/.radiosity-*/result.csv" >/dev/null; }
 bg_run twice -e 1e-12 --size 6000x6000 "$SCENES/room.obj"
 wait_shots twice 1
 kill -INT "$PID"
-wait_run 60 test -s "$T/twice/result.csv"
+wait_run 60 staged
 kill -INT "$PID"
 wait "$PID"; rc=$?
 [ "$rc" -ne 0 ] && pass "second SIGINT ends at once (exit $rc)" || fail "second SIGINT (exit $rc, want non-zero)"
+if cmp -s "$T/twice/result.csv" "$T/prev-result.csv" && cmp -s "$T/twice/log.csv" "$T/prev-log.csv" &&
+   [ ! -e "$T/twice/frame-02.png" ]; then
+  pass "a run ended by a second SIGINT leaves the earlier run's outputs whole"
+else
+  fail "a run ended by a second SIGINT mixed its outputs with the earlier run's ($(ls "$T/twice" | tr '\n' ' '))"
+fi
 
 finish

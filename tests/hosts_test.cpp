@@ -118,8 +118,8 @@ TEST(Hosts, ReadHostsFileErrors) {
   std::string err;
   EXPECT_FALSE(ReadHosts("/nonexistent/hosts", &hosts, &err));
   EXPECT_EQ(err, "/nonexistent/hosts: No such file or directory");
-  EXPECT_FALSE(ReadHosts("/dev/null", &hosts, &err));
-  EXPECT_EQ(err, "/dev/null: lists no host");
+  EXPECT_FALSE(ReadHosts("/dev/null", &hosts, &err));  // a device is not read at all
+  EXPECT_EQ(err, "/dev/null: not a regular file");
 }
 
 }  // namespace

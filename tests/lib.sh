@@ -46,15 +46,16 @@ check_rel() {
   esac
 }
 
-# run_rad OUTDIR [ARGS...]: runs the program quietly into OUTDIR under
+# run_rad OUTDIR [ARGS...]: runs the program quietly (-q unless ARGS has -v) into OUTDIR under
 # `timeout 120`; stdout/stderr go to OUTDIR.out / OUTDIR.err. Sets RC
 # (exit status; 124 = timed out) and SECS (wall time), and prints the run
 # as a comment line for the log.
 run_rad() {
-  local out=$1 t0 t1; shift
+  local out=$1 t0 t1 quiet=-q; shift
+  case " $* " in *" -v "*) quiet= ;; esac  # -v asked for: -q would contradict it
   mkdir -p "$out"
   t0=$(date +%s.%N)
-  timeout 120 "$RADIOSITY" -q -o "$out" "$@" >"$out.out" 2>"$out.err"
+  timeout 120 "$RADIOSITY" ${quiet:+"$quiet"} -o "$out" "$@" >"$out.out" 2>"$out.err"
   RC=$?
   t1=$(date +%s.%N)
   SECS=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.1f", b - a }')

@@ -25,7 +25,7 @@ extra=$(comm -13 "$T/help" "$T/man" | tr '\n' ' ')
   || fail "in the man page's OPTIONS, not in --help: $extra"
 
 for section in NAME SYNOPSIS DESCRIPTION OPTIONS PROGRESS WORKERS "HOSTS FILE" "REMOTE WORKERS" \
-  "CONNECT\\\\-BACK" TROUBLESHOOTING "SCENE FORMAT" "OUTPUT FILES" "EXIT STATUS" ENVIRONMENT \
+  "CONNECT\\\\-BACK" TROUBLESHOOTING "SCENE FORMAT" "OUTPUT FILES" FILES SECURITY LIMITS "EXIT STATUS" ENVIRONMENT \
   EXAMPLES "SEE ALSO"; do
   grep -q "^\.SH $section\$" "$MAN" && pass "section ${section//\\\\/}" || fail "no section ${section//\\\\/}"
 done

@@ -94,8 +94,8 @@ TEST(Options, EveryValueOption) {
   const Options o = Parses({"-o", "res", "-j", "3", "--queue", "7", "--timeout", "2.5",
                          "--worker-cmd", "valgrind radiosity", "-r", "64", "-e", "1e-4", "-s",
                          "500", "-t", "12.5", "--no-overshoot", "--reference", "ref.csv",
-                         "--patch-size", "0.25", "--elements", "3", "--no-subdivide",
-                         "--no-waves", "--subdivide-floor", "0.3", "--min-element", "0.01",
+                         "--patch-size", "0.25", "--elements", "3",
+                         "--subdivide-floor", "0.3", "--min-element", "0.01",
                          "--max-level", "5", "--wave-fraction", "0.5", "--no-rotate", "--seed",
                          "42", "--log-every", "9", "--checkpoint", "ck", "--checkpoint-every",
                          "0.5", "--resume", "old", "--camera", "0 1 2 3 4 5 60", "--size",
@@ -114,8 +114,9 @@ TEST(Options, EveryValueOption) {
   EXPECT_EQ(o.reference, "ref.csv");
   EXPECT_EQ(o.mesh.patch_size, 0.25);
   EXPECT_EQ(o.mesh.elements_per_patch, 3);
-  EXPECT_FALSE(o.subdivide);
-  EXPECT_FALSE(o.sub.waves);
+  // (--no-subdivide and --no-waves contradict the limits: on their own)
+  EXPECT_FALSE(Parses({"--no-subdivide", "s.obj"}).subdivide);
+  EXPECT_FALSE(Parses({"--no-waves", "s.obj"}).sub.waves);
   EXPECT_EQ(o.sub.floor, 0.3);
   EXPECT_EQ(o.sub.min_size, 0.01);
   EXPECT_EQ(o.sub.max_level, 5);
@@ -144,9 +145,9 @@ TEST(Options, LongFormsOfShortOptions) {
   EXPECT_EQ(o.run.max_shots, 5);
   EXPECT_EQ(o.run.max_seconds, 1);
   EXPECT_EQ(o.verbosity, 2);
-  // The last of -q and -v counts; the scene may come first.
-  EXPECT_EQ(Parses({"s.obj", "-v", "-q"}).verbosity, 0);
-  EXPECT_EQ(Parses({"-q", "-v", "s.obj"}).verbosity, 2);
+  // -q and -v together are refused (ContradictionsAreRefused); the scene
+  // may come first.
+  EXPECT_EQ(Parses({"s.obj", "-q"}).verbosity, 0);
   EXPECT_EQ(Parses({"s.obj", "-j", "0"}).scene_path, "s.obj");
 }
 
@@ -167,7 +168,8 @@ TEST(Options, NoSceneOrTwo) {
   std::string err;
   EXPECT_EQ(Parse({}, &o, &err), Parsed::kNoScene);
   EXPECT_EQ(Parse({"-j", "0"}, &o, &err), Parsed::kNoScene);
-  EXPECT_EQ(Parse({"a.obj", "b.obj"}, &o, &err), Parsed::kNoScene);
+  EXPECT_EQ(Parse({"a.obj", "b.obj"}, &o, &err), Parsed::kError);  // one line, not the usage
+  EXPECT_EQ(err, "one scene at a time, got 2: a.obj b.obj (try 'radiosity --help')");
 }
 
 TEST(Options, UnknownOptionsAndMissingValues) {
@@ -366,3 +368,56 @@ TEST(Options, DumpHosts) {
 }
 
 }  // namespace
+
+// Careless command lines (issue 18, item 11): an empty name, a secret
+// anyone may execute, options that cancel each other, more local workers
+// than -j allows, each refused with one line.
+TEST(Options, EmptyNamesAreRefused) {
+  Files f;
+  EXPECT_EQ(Error({"-o", "", "s.obj"}),
+            "--out '': needs a name, not an empty string (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--camera", "", "s.obj"}),
+            "--camera '': needs a name, not an empty string (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--checkpoint=", "s.obj"}),
+            "--checkpoint '': needs a name, not an empty string (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--listen", "", "--secret", f.secret(), "s.obj"}),
+            "--listen '': needs a name, not an empty string (try 'radiosity --help')");
+  for (const char* opt : {"--resume", "--reference", "--converge", "--secret", "--hosts",
+                          "--worker-cmd"})
+    EXPECT_NE(Error({opt, "", "s.obj"}), "") << opt;
+}
+
+TEST(Options, ContradictionsAreRefused) {
+  EXPECT_EQ(Error({"-q", "-v", "s.obj"}), "-q and -v contradict each other (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--no-subdivide", "--max-level", "3", "s.obj"}),
+            "--max-level limits dividing, and --no-subdivide divides nothing (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--min-element", "0.1", "--no-subdivide", "s.obj"}),
+            "--min-element limits dividing, and --no-subdivide divides nothing (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--no-waves", "--wave-fraction", "0.5", "s.obj"}),
+            "--wave-fraction starts waves, and --no-waves has none (try 'radiosity --help')");
+  Parses({"--no-subdivide", "--no-waves", "s.obj"});  // the same said twice
+}
+
+TEST(Options, ASecretOnlyItsOwnerMayReadOrWrite) {
+  Files f;
+  const std::string exec = f.Write("exec", "0123456789abcdef0123456789abcdef\n");
+  chmod(exec.c_str(), 0700);
+  EXPECT_EQ(Error({"--listen", "7000", "--secret", exec, "s.obj"}),
+            exec + ": the secret must be mode 0600 or 0400, not 0700: chmod 600 " + exec);
+}
+
+TEST(Options, LocalWorkersStayWithinTheCap) {
+  Files f;
+  std::string many;
+  for (int i = 0; i < 2; ++i) many += "localhost slots=200\n";
+  const std::string hosts = f.Write("many", many);
+  EXPECT_EQ(Error({"-H", hosts, "s.obj"}),
+            "-j 0 and the localhost slots of " + hosts + " make 400 local workers, more than 256");
+  EXPECT_EQ(Error({"-j", "100", "-H", f.Write("one", "localhost slots=200\n"), "s.obj"}),
+            "-j 100 and the localhost slots of " + f.Write("one", "localhost slots=200\n") +
+                " make 300 local workers, more than 256");
+  std::string all;
+  for (int i = 0; i < 17; ++i) all += "node" + std::to_string(i) + " slots=256\n";
+  EXPECT_EQ(Error({"-H", f.Write("all", all), "s.obj"}),
+            f.Write("all", all) + ":17: more than 4096 slots in all");
+}

@@ -189,6 +189,55 @@ TEST_F(PoolTest, HeartbeatsAfterSilenceAndTimeoutWithout) {
   EXPECT_EQ(LostWhy(), "silent for 10.5 s");
 }
 
+// Heartbeats alone do not keep a worker that was given work: with no
+// column for --timeout it is dropped (its patches then go to the others,
+// as for any lost worker); one that answers, or has nothing to do, stays.
+TEST_F(PoolTest, AWorkerGivenWorkThatSendsNoColumnIsDropped) {
+  Peer p = Joined();
+  Msg type;
+  // Idle: heartbeats are enough.
+  for (int i = 0; i < 3; ++i) {
+    clock_.now += 0.6 * opts_.timeout_s;
+    p.SendHeartbeat();
+    EXPECT_TRUE(Events().empty()) << i;
+    while (!p.Quiet()) ASSERT_TRUE(p.Next(&type));
+  }
+  pool_.Assign(0, {1, 0});
+  pool_.Assign(0, {2, 0});
+  // A column within the timeout is progress, though one patch is still owed.
+  clock_.now += 0.6 * opts_.timeout_s;
+  proto::Column c;
+  c.patch = 1;
+  c.ff = {{0, 0.5f}};
+  std::string frame;
+  proto::EncodeColumn(c, &frame);
+  p.Send(frame);
+  std::vector<WorkerEvent> ev = Events();
+  ASSERT_EQ(ev.size(), 1u);
+  EXPECT_EQ(ev[0].kind, WorkerEvent::kColumn);
+  for (int i = 0; i < 3; ++i) {  // then only heartbeats
+    clock_.now += 0.4 * opts_.timeout_s;
+    p.SendHeartbeat();
+    while (!p.Quiet()) ASSERT_TRUE(p.Next(&type));
+    if (i < 2) {
+      EXPECT_TRUE(Events().empty()) << i;
+    }
+  }
+  EXPECT_EQ(LostWhy(), "no column in 12.0 s though given work (heartbeats only)");
+}
+
+// The run's clock starts when the first worker joins: a run that waits
+// for its workers (connect-back, ssh) does not spend its -t on waiting.
+TEST_F(PoolTest, TheRunClockStartsAtTheFirstJoin) {
+  EXPECT_EQ(pool_.Now(), 0);
+  clock_.now += 25;  // waiting for a worker
+  EXPECT_EQ(pool_.Now(), 0);
+  Peer p = Joined();
+  EXPECT_EQ(pool_.Now(), 0);
+  clock_.now += 1.5;
+  EXPECT_EQ(pool_.Now(), 1.5);
+}
+
 TEST_F(PoolTest, GarbageIsABadFrame) {
   Peer p = Connect();
   ReadSetup(&p);

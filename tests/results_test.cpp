@@ -81,7 +81,9 @@ TEST(Results, ReferenceOfAnotherSceneIsRefusedWithItsLine) {
     EXPECT_NE(err.find(c.error), std::string::npos) << err;
   }
   EXPECT_FALSE(ReadReference(TempPath("missing.csv"), s, &ref, &err));
-  EXPECT_NE(err.find("cannot open"), std::string::npos) << err;
+  EXPECT_NE(err.find("missing.csv: No such file or directory"), std::string::npos) << err;
+  EXPECT_FALSE(ReadReference("/dev/zero", s, &ref, &err));  // refused, not read for ever
+  EXPECT_EQ(err, "/dev/zero: not a regular file");
 }
 
 TEST(Results, ShadingAveragesWithinAFaceAndAcrossCoplanarNeighbours) {
