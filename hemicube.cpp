@@ -212,24 +212,57 @@ Hemicube::Key Hemicube::KeyOf(const Mesh& mesh) {
 
 void Hemicube::BuildCache(const Mesh& mesh) {
   key_ = KeyOf(mesh);
-  faces_.assign(mesh.faces.size(), CacheFace());
-  verts_.clear();
+  // First in face order: planes, boxes and ranks (the order a plain
+  // z-buffer draws the leaves in, which breaks depth ties).
+  std::vector<CacheFace> byface;
+  std::vector<int> leaves;
   elem_.clear();
-  outline_.clear();
-  outline_at_.assign(1, 0);
-  std::vector<int> rel(mesh.verts.size(), -1), owner(mesh.verts.size(), -1), leaves;
-  size_t most = 0;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const MeshFace& mf = mesh.faces[f];
-    CacheFace& cf = faces_[f];
+    CacheFace cf;
+    cf.face = int(f);
     cf.normal = mf.normal;
     cf.offset = mf.offset;
+    cf.lb = int(elem_.size());
+    for (int p : mf.patches) {
+      mesh.Leaves(p, &leaves);
+      elem_.insert(elem_.end(), leaves.begin(), leaves.end());
+    }
+    cf.le = int(elem_.size());
+    if (cf.le == cf.lb) continue;  // nothing to draw
+    cf.lo = cf.hi = mesh.verts[mf.vbegin];
+    auto grow = [&](int i) {
+      cf.lo = glm::min(cf.lo, mesh.verts[i]);
+      cf.hi = glm::max(cf.hi, mesh.verts[i]);
+    };
+    for (int i = mf.vbegin; i < mf.vend; ++i) grow(i);
+    for (int i : mf.divide_verts) grow(i);
+    byface.push_back(cf);
+  }
+  std::vector<int> order(byface.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = int(i);
+  nodes_.clear();
+  if (!order.empty()) BuildNodes(byface, &order, 0, int(order.size()));
+
+  // Then laid out in the hierarchy's order, the order a column reads them:
+  // each face's vertices and its leaves' outlines together.
+  faces_.clear();
+  by_face_.assign(order.size(), 0);
+  verts_.clear();
+  outline_.clear();
+  outline_at_.assign(1, 0);
+  std::vector<int> rel(mesh.verts.size(), -1), owner(mesh.verts.size(), -1);
+  size_t most = 0;
+  for (int k : order) {
+    by_face_[k] = int(faces_.size());
+    CacheFace cf = byface[k];
+    const MeshFace& mf = mesh.faces[cf.face];
     cf.vb = int(verts_.size());
     // Face-relative indices keep the order of vertex ids (Divide appends),
     // which the near-plane clip relies on to cut shared edges alike.
     auto add = [&](int i) {
       CHECK(owner[i] < 0);  // faces share no vertices
-      owner[i] = int(f);
+      owner[i] = cf.face;
       rel[i] = int(verts_.size()) - cf.vb;
       verts_.push_back(mesh.verts[i]);
     };
@@ -241,26 +274,17 @@ void Hemicube::BuildCache(const Mesh& mesh) {
     }
     cf.ve = int(verts_.size());
     most = std::max(most, size_t(cf.ve - cf.vb));
-    if (cf.ve > cf.vb) cf.lo = cf.hi = verts_[cf.vb];
-    for (int i = cf.vb; i < cf.ve; ++i) {
-      cf.lo = glm::min(cf.lo, verts_[i]);
-      cf.hi = glm::max(cf.hi, verts_[i]);
-    }
-    cf.lb = int(elem_.size());
-    for (int p : mf.patches) {
-      mesh.Leaves(p, &leaves);
-      for (int id : leaves) {
-        int vid[8];
-        const int nv = Outline(mesh.elems[id], vid);
-        for (int i = 0; i < nv; ++i) {
-          CHECK(owner[vid[i]] == int(f));
-          outline_.push_back(rel[vid[i]]);
-        }
-        outline_at_.push_back(int(outline_.size()));
-        elem_.push_back(id);
+    cf.pb = int(outline_at_.size()) - 1;
+    for (int r = cf.lb; r < cf.le; ++r) {
+      int vid[8];
+      const int nv = Outline(mesh.elems[elem_[r]], vid);
+      for (int i = 0; i < nv; ++i) {
+        CHECK(owner[vid[i]] == cf.face);
+        outline_.push_back(rel[vid[i]]);
       }
+      outline_at_.push_back(int(outline_.size()));
     }
-    cf.le = int(elem_.size());
+    faces_.push_back(cf);
   }
   for (auto* a : {&lx_, &ly_, &lz_}) a->resize(most);
   code_.resize(most);
@@ -270,25 +294,21 @@ void Hemicube::BuildCache(const Mesh& mesh) {
   }
   acc_.assign(mesh.elems.size(), 0.0);
   touched_.assign((mesh.elems.size() + 63) / 64, 0);
-  node_faces_.clear();
-  for (size_t f = 0; f < faces_.size(); ++f)
-    if (faces_[f].le > faces_[f].lb) node_faces_.push_back(int(f));
-  nodes_.clear();
-  if (!node_faces_.empty()) BuildNodes(0, int(node_faces_.size()));
 }
 
 // Median split along the box's longest axis, down to a few faces a node:
 // a face's own test is as cheap as a node's.
-int Hemicube::BuildNodes(int first, int count) {
+int Hemicube::BuildNodes(const std::vector<CacheFace>& faces, std::vector<int>* order,
+                         int first, int count) {
   constexpr int kLeafFaces = 4;
   const int at = int(nodes_.size());
   nodes_.emplace_back();
   Node nd;
-  nd.lo = faces_[node_faces_[first]].lo;
-  nd.hi = faces_[node_faces_[first]].hi;
+  nd.lo = faces[(*order)[first]].lo;
+  nd.hi = faces[(*order)[first]].hi;
   for (int i = first; i < first + count; ++i) {
-    nd.lo = glm::min(nd.lo, faces_[node_faces_[i]].lo);
-    nd.hi = glm::max(nd.hi, faces_[node_faces_[i]].hi);
+    nd.lo = glm::min(nd.lo, faces[(*order)[i]].lo);
+    nd.hi = glm::max(nd.hi, faces[(*order)[i]].hi);
   }
   if (count <= kLeafFaces) {
     nd.first = first;
@@ -297,13 +317,13 @@ int Hemicube::BuildNodes(int first, int count) {
     const glm::dvec3 ext = nd.hi - nd.lo;
     const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : ext.y >= ext.z ? 1 : 2;
     const int mid = first + count / 2;
-    std::nth_element(node_faces_.begin() + first, node_faces_.begin() + mid,
-                     node_faces_.begin() + first + count, [&](int a, int b) {
-                       return faces_[a].lo[axis] + faces_[a].hi[axis] <
-                              faces_[b].lo[axis] + faces_[b].hi[axis];
+    std::nth_element(order->begin() + first, order->begin() + mid,
+                     order->begin() + first + count, [&](int a, int b) {
+                       return faces[a].lo[axis] + faces[a].hi[axis] <
+                              faces[b].lo[axis] + faces[b].hi[axis];
                      });
-    BuildNodes(first, mid - first);
-    nd.right = BuildNodes(mid, first + count - mid);
+    BuildNodes(faces, order, first, mid - first);
+    nd.right = BuildNodes(faces, order, mid, first + count - mid);
   }
   nodes_[at] = nd;
   return at;
@@ -443,6 +463,7 @@ void Hemicube::DrawFace(int f, uint32_t mask, double* clock) {
   // per hemicube face: the same for every element of this face.
   float za[5], zb[5], zc[5];
   for (int h = 0; h < 5; ++h) {
+    if (!((mask >> h) & 1)) continue;
     float nf[3];
     ToFace(h, nl, nf);
     const float boff = h == 0 ? 1.0f : 0.0f;
@@ -450,9 +471,9 @@ void Hemicube::DrawFace(int f, uint32_t mask, double* clock) {
     zb[h] = float(nf[1] / (half * k));
     zc[h] = float((nf[2] - nf[0] - nf[1] * boff) / k);
   }
-  for (int r = cf.lb; r < cf.le; ++r) {
-    const int32_t* vid = &outline_[outline_at_[r]];
-    const int n = outline_at_[r + 1] - outline_at_[r];
+  for (int r = cf.lb, at = cf.pb; r < cf.le; ++r, ++at) {
+    const int32_t* vid = &outline_[outline_at_[at]];
+    const int n = outline_at_[at + 1] - outline_at_[at];
     uint32_t all = ~0u, any = 0;
     for (int i = 0; i < n; ++i) {
       all &= code_[vid[i]];
@@ -547,11 +568,13 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
     const CacheFace& cf = faces_[f];
     const double s = glm::dot(cf.normal, c_) - cf.offset;  // shooter's height over the face
     if (!(s > coplanar_)) return;                          // seen from behind or edge-on
-    if (culling_ && !(mask = Visible(cf.lo, cf.hi))) return;
+    // `mask` is its node's; a face of a few leaves is drawn under that, as
+    // testing it again would cost about what drawing it does.
+    if (culling_ && cf.le - cf.lb > 4 && !(mask = Visible(cf.lo, cf.hi))) return;
     DrawFace(f, mask, stats ? clock : nullptr);
   };
   if (!culling_) {
-    for (size_t f = 0; f < faces_.size(); ++f) draw(int(f), 31);
+    for (int f : by_face_) draw(f, 31);
   } else if (!nodes_.empty()) {
     // Front to back, so that what is near fills the buffers before what
     // it hides is tested.
@@ -560,9 +583,10 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       const Node& nd = nodes_[stack_.back()];
       const int at = stack_.back();
       stack_.pop_back();
-      if (!Visible(nd.lo, nd.hi)) continue;
+      const uint32_t mask = Visible(nd.lo, nd.hi);
+      if (!mask) continue;
       if (nd.right < 0) {
-        for (int i = nd.first; i < nd.first + nd.count; ++i) draw(node_faces_[i], 0);
+        for (int i = nd.first; i < nd.first + nd.count; ++i) draw(i, mask);
         continue;
       }
       const Node &l = nodes_[at + 1], &r = nodes_[nd.right];

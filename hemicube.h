@@ -75,12 +75,14 @@ class Hemicube {
     glm::dvec3 normal{0.0};
     double offset = 0;
     glm::dvec3 lo{0.0}, hi{0.0};  // bounding box of its vertices
+    int face = -1;                // in the mesh
     int vb = 0, ve = 0;           // its vertices: verts_[vb, ve)
     int lb = 0, le = 0;           // its leaves' ranks: [lb, le)
+    int pb = 0;                   // its first leaf's outline_at_ slot
   };
   struct Node {                   // of the hierarchy over faces, depth first
     glm::dvec3 lo{0.0}, hi{0.0};
-    int first = 0, count = 0;     // a leaf: node_faces_[first, first + count)
+    int first = 0, count = 0;     // a leaf: faces_[first, first + count)
     int right = -1;               // an inner node: its second child (first is next)
   };
   struct Key {
@@ -94,7 +96,9 @@ class Hemicube {
   };
   static Key KeyOf(const Mesh& mesh);
   void BuildCache(const Mesh& mesh);
-  int BuildNodes(int first, int count);
+  // Nodes over faces[order[first, first + count)], reordering `order`.
+  int BuildNodes(const std::vector<CacheFace>& faces, std::vector<int>* order, int first,
+                 int count);
   // The hemicube faces (5 bits) box [lo, hi] may cover visibly: not
   // wholly behind the shooter, outside the face or behind its buffer.
   uint32_t Visible(const glm::dvec3& lo, const glm::dvec3& hi);
@@ -119,13 +123,17 @@ class Hemicube {
   std::vector<uint8_t> dirty_;
 
   Key key_;
-  std::vector<CacheFace> faces_;   // by mesh face
+  // Faces with leaves in the hierarchy's order, and their vertices and
+  // outlines in that order: a column reads them front to back, nearly in
+  // memory order. Vertices in double, as in the mesh, so that they move
+  // into the shooter's frame exactly as the mesh's own would.
+  std::vector<CacheFace> faces_;
+  std::vector<int32_t> by_face_;   // faces_ indices in mesh face order
   std::vector<glm::dvec3> verts_;  // world positions, per face contiguous
   std::vector<int32_t> elem_;      // rank -> element id; ranks in face order
   std::vector<int32_t> outline_;   // face-relative vertex indices
-  std::vector<int32_t> outline_at_;// rank -> its outline: [at[r], at[r + 1])
+  std::vector<int32_t> outline_at_;// leaf k's outline: [at[k], at[k + 1])
   std::vector<Node> nodes_;
-  std::vector<int32_t> node_faces_;
 
   // Per column: the shooter's frame and per-face scratch.
   glm::dvec3 c_{0.0}, u_{0.0}, v_{0.0}, n_{0.0};
