@@ -1,7 +1,5 @@
 #include "hemicube.h"
 
-#include <sys/stat.h>
-
 #include <cmath>
 #include <string>
 
@@ -137,16 +135,11 @@ TEST(Hemicube, ColumnIsSortedAndPositive) {
   }
 }
 
-// A shipped scene, found beside the test's source or from the top directory.
 Mesh Shipped(const std::string& name) {
-  std::string path = __FILE__;
-  path = path.substr(0, path.find_last_of('/') + 1) + "../scenes/" + name + ".obj";
-  struct stat st;
-  if (stat(path.c_str(), &st) != 0) path = "scenes/" + name + ".obj";
   Scene scene;
   std::string err;
   std::vector<std::string> warnings;
-  EXPECT_TRUE(LoadScene(path, &scene, &err, &warnings)) << err;
+  EXPECT_TRUE(LoadScene(ShippedScenePath(name), &scene, &err, &warnings)) << err;
   Mesh mesh;
   EXPECT_TRUE(BuildMesh(scene, MeshOptions(), &mesh, &err)) << err;
   return mesh;
