@@ -248,42 +248,40 @@ void Hemicube::BuildCache(const Mesh& mesh) {
   // each face's vertices and its leaves' outlines together.
   faces_.clear();
   by_face_.assign(order.size(), 0);
-  verts_.clear();
   outline_.clear();
   outline_at_.assign(1, 0);
-  std::vector<int> rel(mesh.verts.size(), -1), owner(mesh.verts.size(), -1);
+  std::vector<int> rel(mesh.verts.size(), -1);  // this face's vertices only
   size_t most = 0;
   for (int k : order) {
     by_face_[k] = int(faces_.size());
     CacheFace cf = byface[k];
     const MeshFace& mf = mesh.faces[cf.face];
-    cf.vb = int(verts_.size());
-    // Face-relative indices keep the order of vertex ids (Divide appends),
-    // which the near-plane clip relies on to cut shared edges alike.
-    auto add = [&](int i) {
-      CHECK(owner[i] < 0);  // faces share no vertices
-      owner[i] = cf.face;
-      rel[i] = int(verts_.size()) - cf.vb;
-      verts_.push_back(mesh.verts[i]);
-    };
-    for (int i = mf.vbegin; i < mf.vend; ++i) add(i);
+    cf.vb = mf.vbegin;
+    cf.ve = mf.vend;
+    cf.nd = int(mf.divide_verts.size());
+    // Face-relative indices, in the order DrawFace transforms them, keep
+    // the order of vertex ids (Divide appends), which the near-plane clip
+    // relies on to cut shared edges alike.
+    int n = 0;
+    for (int i = mf.vbegin; i < mf.vend; ++i) rel[i] = n++;
     int last = mf.vend - 1;
     for (int i : mf.divide_verts) {
-      CHECK(i > last);
-      add(last = i);
+      CHECK(i > last && rel[i] < 0);
+      rel[last = i] = n++;
     }
-    cf.ve = int(verts_.size());
-    most = std::max(most, size_t(cf.ve - cf.vb));
+    most = std::max(most, size_t(n));
     cf.pb = int(outline_at_.size()) - 1;
     for (int r = cf.lb; r < cf.le; ++r) {
       int vid[8];
       const int nv = Outline(mesh.elems[elem_[r]], vid);
       for (int i = 0; i < nv; ++i) {
-        CHECK(owner[vid[i]] == cf.face);
+        CHECK(rel[vid[i]] >= 0);  // a vertex of this face
         outline_.push_back(rel[vid[i]]);
       }
       outline_at_.push_back(int(outline_.size()));
     }
+    for (int i = mf.vbegin; i < mf.vend; ++i) rel[i] = -1;
+    for (int i : mf.divide_verts) rel[i] = -1;
     faces_.push_back(cf);
   }
   for (auto* a : {&lx_, &ly_, &lz_}) a->resize(most);
@@ -412,18 +410,21 @@ uint32_t Hemicube::Visible(const glm::dvec3& lo, const glm::dvec3& hi) {
   return mask;
 }
 
-void Hemicube::DrawFace(int f, uint32_t mask, double* clock) {
+void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
   const CacheFace& cf = faces_[f];
-  const int nv = cf.ve - cf.vb;
   const float half = 0.5f * res_;
-  const glm::dvec3* vp = &verts_[cf.vb];
   float *lx = lx_.data(), *ly = ly_.data(), *lz = lz_.data();
-  for (int i = 0; i < nv; ++i) {
-    const glm::dvec3 d = vp[i] - c_;
-    lx[i] = float(glm::dot(d, u_));
-    ly[i] = float(glm::dot(d, v_));
-    lz[i] = float(glm::dot(d, n_));
-  }
+  int nv = 0;
+  auto put = [&](const glm::dvec3& p) {
+    const glm::dvec3 d = p - c_;
+    lx[nv] = float(glm::dot(d, u_));
+    ly[nv] = float(glm::dot(d, v_));
+    lz[nv] = float(glm::dot(d, n_));
+    ++nv;
+  };
+  for (int i = cf.vb; i < cf.ve; ++i) put(mesh.verts[i]);
+  if (cf.nd)
+    for (int i : mesh.faces[cf.face].divide_verts) put(mesh.verts[i]);
   for (int i = 0; i < nv; ++i) code_[i] = Outcodes(lx[i], ly[i], lz[i], near_);
   // Pixel coordinates on the faces it may reach, from one reciprocal per
   // face pair (the faces look along z, ±x, ±y). Used only where the vertex
@@ -571,7 +572,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
     // `mask` is its node's; a face of a few leaves is drawn under that, as
     // testing it again would cost about what drawing it does.
     if (culling_ && cf.le - cf.lb > 4 && !(mask = Visible(cf.lo, cf.hi))) return;
-    DrawFace(f, mask, stats ? clock : nullptr);
+    DrawFace(mesh, f, mask, stats ? clock : nullptr);
   };
   if (!culling_) {
     for (int f : by_face_) draw(f, 31);

@@ -76,7 +76,8 @@ class Hemicube {
     double offset = 0;
     glm::dvec3 lo{0.0}, hi{0.0};  // bounding box of its vertices
     int face = -1;                // in the mesh
-    int vb = 0, ve = 0;           // its vertices: verts_[vb, ve)
+    int vb = 0, ve = 0;           // its vertices: Mesh::verts[vb, ve)
+    int nd = 0;                   // and its divide_verts' count
     int lb = 0, le = 0;           // its leaves' ranks: [lb, le)
     int pb = 0;                   // its first leaf's outline_at_ slot
   };
@@ -105,7 +106,7 @@ class Hemicube {
   bool Open(int h, int xa, int xb, int ra, int rb, float zt);
   // Its vertices into the shooter's frame, its leaves into the buffers of
   // the hemicube faces in `mask`; adds to clock's stages when non-null.
-  void DrawFace(int f, uint32_t mask, double* clock);
+  void DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock);
   void Scan(int face, const float (*pt)[2], int n, float za, float zb, float zc,
             int32_t rank);
 
@@ -123,13 +124,12 @@ class Hemicube {
   std::vector<uint8_t> dirty_;
 
   Key key_;
-  // Faces with leaves in the hierarchy's order, and their vertices and
-  // outlines in that order: a column reads them front to back, nearly in
-  // memory order. Vertices in double, as in the mesh, so that they move
-  // into the shooter's frame exactly as the mesh's own would.
+  // Faces with leaves in the hierarchy's order, and their outlines in that
+  // order: a column reads them front to back, nearly in memory order. The
+  // vertices are the mesh's own (a face's are contiguous there but for
+  // those Divide added), not copied: that would cost 24 bytes a vertex.
   std::vector<CacheFace> faces_;
   std::vector<int32_t> by_face_;   // faces_ indices in mesh face order
-  std::vector<glm::dvec3> verts_;  // world positions, per face contiguous
   std::vector<int32_t> elem_;      // rank -> element id; ranks in face order
   std::vector<int32_t> outline_;   // face-relative vertex indices
   std::vector<int32_t> outline_at_;// leaf k's outline: [at[k], at[k + 1])
