@@ -612,8 +612,20 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
     for (int base = 0; base < R; base += 64) {
       const int len = std::min(64, R - base);
       uint64_t ends = 0;  // bit k: a run ends after pixel base + k
-      for (int k = 0; k < len; ++k)
-        ends |= uint64_t(it[base + k + 1] != it[base + k]) << k;
+      if (len == 64) {
+        // A byte per pixel (a loop that vectorises), then 8 bytes of 0/1
+        // into 8 bits by one multiply: byte k lands on bit 56 + k.
+        uint8_t ne[64];
+        for (int k = 0; k < 64; ++k) ne[k] = it[base + k + 1] != it[base + k];
+        for (int j = 0; j < 8; ++j) {
+          uint64_t x;
+          std::memcpy(&x, ne + 8 * j, 8);
+          ends |= ((x * 0x0102040810204080ull) >> 56) << (8 * j);
+        }
+      } else {
+        for (int k = 0; k < len; ++k)
+          ends |= uint64_t(it[base + k + 1] != it[base + k]) << k;
+      }
       if (base + len == R) ends |= uint64_t(1) << (len - 1);
       while (ends) {
         const int x1 = base + __builtin_ctzll(ends) + 1;
