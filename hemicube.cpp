@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 
 #include "check.h"
 #include "clock.h"
@@ -80,6 +81,9 @@ Hemicube::Hemicube(int resolution) : res_(resolution) {
   }
   depth_.resize(d.size());
   item_.resize(d.size() + 1, -1);  // + a sentinel read past the last row
+  const size_t tw = (R + kTile - 1) / kTile, th = (H + kTile - 1) / kTile;
+  tile_min_.resize(tw * tw + 4 * th * tw);
+  dirty_.resize(tile_min_.size());
 }
 
 namespace {
@@ -135,13 +139,18 @@ inline int64_t FirstPixel(int64_t x) { return (x - 32768 + 65535) >> 16; }
 }  // namespace
 
 // Fills the convex polygon pt[0..n) (pixel coordinates) of face `face`
-// with element `id`, depth 1/d = za*X + zb*Y + zc: pixel centres in
+// with leaf `rank`, depth 1/d = za*X + zb*Y + zc: pixel centres in
 // [left, right) x [top, bottom), so shared edges give each pixel to one side.
+// A tie in depth goes to the lower rank, the leaf first in face order, so
+// that the buffer ends the same whatever order the leaves come in.
 void Hemicube::Scan(int face, const float (*pt)[2], int n, float za, float zb,
-                    float zc, int32_t id) {
+                    float zc, int32_t rank) {
   const int R = res_, H = face == 0 ? R : R / 2;
   float* depth = depth_.data() + (face == 0 ? 0 : size_t(R) * R + size_t(face - 1) * H * R);
   int32_t* item = item_.data() + (depth - depth_.data());
+  const int tw = (R + kTile - 1) / kTile;
+  uint8_t* dirty = dirty_.data() +
+                   (face == 0 ? 0 : size_t(tw) * tw + size_t(face - 1) * ((H + kTile - 1) / kTile) * tw);
   int top = 0, bottom = 0;
   for (int i = 1; i < n; ++i) {
     if (pt[i][1] < pt[top][1]) top = i;
@@ -161,14 +170,367 @@ void Hemicube::Scan(int face, const float (*pt)[2], int n, float za, float zb,
     const float yc = y + 0.5f;
     float* drow = depth + size_t(y) * R;
     int32_t* irow = item + size_t(y) * R;
+    if (xa < xb) {
+      uint8_t* d = dirty + size_t(y / kTile) * tw;
+      for (int t = xa / kTile; t <= (xb - 1) / kTile; ++t) d[t] = 1;
+    }
     const float zrow = zb * yc + zc + 0.5f * za;
     // Branch-free so that the compiler can vectorise the depth test.
     for (int x = xa; x < xb; ++x) {
       const float z = za * float(x) + zrow;
-      const bool nearer = z > drow[x];
+      const bool nearer = (z > drow[x]) | ((z == drow[x]) & (rank < irow[x]));
       drow[x] = nearer ? z : drow[x];
-      irow[x] = nearer ? id : irow[x];
+      irow[x] = nearer ? rank : irow[x];
     }
+  }
+}
+
+bool Hemicube::Key::operator==(const Key& o) const {
+  return mesh == o.mesh && verts == o.verts && elems == o.elems && nverts == o.nverts &&
+         nelems == o.nelems && nfaces == o.nfaces && divided == o.divided && first == o.first &&
+         last == o.last;
+}
+
+// What changes when the mesh does: Divide() appends elements and vertices
+// and counts itself; a mesh built anew moves its arrays or their sizes or
+// end points. Cheap enough to compare on every column.
+Hemicube::Key Hemicube::KeyOf(const Mesh& mesh) {
+  Key k;
+  k.mesh = &mesh;
+  k.verts = mesh.verts.data();
+  k.elems = mesh.elems.data();
+  k.nverts = mesh.verts.size();
+  k.nelems = mesh.elems.size();
+  k.nfaces = mesh.faces.size();
+  k.divided = mesh.divided;
+  if (!mesh.verts.empty()) {
+    k.first = mesh.verts.front();
+    k.last = mesh.verts.back();
+  }
+  return k;
+}
+
+void Hemicube::BuildCache(const Mesh& mesh) {
+  key_ = KeyOf(mesh);
+  // First in face order: planes, boxes and ranks (the order a plain
+  // z-buffer draws the leaves in, which breaks depth ties).
+  std::vector<CacheFace> byface;
+  std::vector<int> leaves;
+  elem_.clear();
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const MeshFace& mf = mesh.faces[f];
+    CacheFace cf;
+    cf.face = int(f);
+    cf.normal = mf.normal;
+    cf.offset = mf.offset;
+    cf.lb = int(elem_.size());
+    for (int p : mf.patches) {
+      mesh.Leaves(p, &leaves);
+      elem_.insert(elem_.end(), leaves.begin(), leaves.end());
+    }
+    cf.le = int(elem_.size());
+    if (cf.le == cf.lb) continue;  // nothing to draw
+    cf.lo = cf.hi = mesh.verts[mf.vbegin];
+    auto grow = [&](int i) {
+      cf.lo = glm::min(cf.lo, mesh.verts[i]);
+      cf.hi = glm::max(cf.hi, mesh.verts[i]);
+    };
+    for (int i = mf.vbegin; i < mf.vend; ++i) grow(i);
+    for (int i : mf.divide_verts) grow(i);
+    byface.push_back(cf);
+  }
+  std::vector<int> order(byface.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = int(i);
+  nodes_.clear();
+  if (!order.empty()) BuildNodes(byface, &order, 0, int(order.size()));
+
+  // Then laid out in the hierarchy's order, the order a column reads them:
+  // each face's vertices and its leaves' outlines together.
+  faces_.clear();
+  by_face_.assign(order.size(), 0);
+  outline_.clear();
+  outline_at_.assign(1, 0);
+  std::vector<int> rel(mesh.verts.size(), -1);  // this face's vertices only
+  size_t most = 0;
+  for (int k : order) {
+    by_face_[k] = int(faces_.size());
+    CacheFace cf = byface[k];
+    const MeshFace& mf = mesh.faces[cf.face];
+    cf.vb = mf.vbegin;
+    cf.ve = mf.vend;
+    cf.nd = int(mf.divide_verts.size());
+    // Face-relative indices, in the order DrawFace transforms them, keep
+    // the order of vertex ids (Divide appends), which the near-plane clip
+    // relies on to cut shared edges alike.
+    int n = 0;
+    for (int i = mf.vbegin; i < mf.vend; ++i) rel[i] = n++;
+    int last = mf.vend - 1;
+    for (int i : mf.divide_verts) {
+      CHECK(i > last && rel[i] < 0);
+      rel[last = i] = n++;
+    }
+    most = std::max(most, size_t(n));
+    cf.pb = int(outline_at_.size()) - 1;
+    for (int r = cf.lb; r < cf.le; ++r) {
+      int vid[8];
+      const int nv = Outline(mesh.elems[elem_[r]], vid);
+      for (int i = 0; i < nv; ++i) {
+        CHECK(rel[vid[i]] >= 0);  // a vertex of this face
+        outline_.push_back(rel[vid[i]]);
+      }
+      outline_at_.push_back(int(outline_.size()));
+    }
+    for (int i = mf.vbegin; i < mf.vend; ++i) rel[i] = -1;
+    for (int i : mf.divide_verts) rel[i] = -1;
+    faces_.push_back(cf);
+  }
+  for (auto* a : {&lx_, &ly_, &lz_}) a->resize(most);
+  code_.resize(most);
+  for (int h = 0; h < 5; ++h) {
+    sx_[h].resize(most);
+    sy_[h].resize(most);
+  }
+  acc_.assign(mesh.elems.size(), 0.0);
+  touched_.assign((mesh.elems.size() + 63) / 64, 0);
+}
+
+// Median split along the box's longest axis, down to a few faces a node:
+// a face's own test is as cheap as a node's.
+int Hemicube::BuildNodes(const std::vector<CacheFace>& faces, std::vector<int>* order,
+                         int first, int count) {
+  constexpr int kLeafFaces = 4;
+  const int at = int(nodes_.size());
+  nodes_.emplace_back();
+  Node nd;
+  nd.lo = faces[(*order)[first]].lo;
+  nd.hi = faces[(*order)[first]].hi;
+  for (int i = first; i < first + count; ++i) {
+    nd.lo = glm::min(nd.lo, faces[(*order)[i]].lo);
+    nd.hi = glm::max(nd.hi, faces[(*order)[i]].hi);
+  }
+  if (count <= kLeafFaces) {
+    nd.first = first;
+    nd.count = count;
+  } else {
+    const glm::dvec3 ext = nd.hi - nd.lo;
+    const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : ext.y >= ext.z ? 1 : 2;
+    const int mid = first + count / 2;
+    std::nth_element(order->begin() + first, order->begin() + mid,
+                     order->begin() + first + count, [&](int a, int b) {
+                       return faces[a].lo[axis] + faces[a].hi[axis] <
+                              faces[b].lo[axis] + faces[b].hi[axis];
+                     });
+    BuildNodes(faces, order, first, mid - first);
+    nd.right = BuildNodes(faces, order, mid, first + count - mid);
+  }
+  nodes_[at] = nd;
+  return at;
+}
+
+// Whether a pixel of hemicube face h in [xa, xb) x [ra, rb) holds a depth
+// <= zt (something at zt could show there): tile by tile, by the tile's
+// least depth where that settles it (kept up to date lazily: Scan marks
+// the tiles it writes), else pixel by pixel in the tile's part of the
+// rectangle, stopping at the first.
+bool Hemicube::Open(int h, int xa, int xb, int ra, int rb, float zt) {
+  const int R = res_, H = h == 0 ? R : R / 2, tw = (R + kTile - 1) / kTile;
+  const size_t base = h == 0 ? 0 : size_t(R) * R + size_t(h - 1) * H * R;
+  const float* depth = depth_.data() + base;
+  const size_t tbase = h == 0 ? 0 : size_t(tw) * tw + size_t(h - 1) * ((H + kTile - 1) / kTile) * tw;
+  float* tmin = tile_min_.data() + tbase;
+  uint8_t* dirty = dirty_.data() + tbase;
+  for (int ty = ra / kTile; ty <= (rb - 1) / kTile; ++ty) {
+    const int y0 = ty * kTile, y1 = std::min(H, y0 + kTile);
+    for (int tx = xa / kTile; tx <= (xb - 1) / kTile; ++tx) {
+      const int x0 = tx * kTile, x1 = std::min(R, x0 + kTile);
+      const size_t t = size_t(ty) * tw + tx;
+      if (dirty[t]) {
+        float m = depth[size_t(y0) * R + x0];
+        for (int y = y0; y < y1; ++y)
+          for (int x = x0; x < x1; ++x) m = std::min(m, depth[size_t(y) * R + x]);
+        tmin[t] = m;
+        dirty[t] = 0;
+      }
+      if (tmin[t] > zt) continue;
+      for (int y = std::max(y0, ra); y < std::min(y1, rb); ++y)
+        for (int x = std::max(x0, xa); x < std::min(x1, xb); ++x)
+          if (depth[size_t(y) * R + x] <= zt) return true;
+    }
+  }
+  return false;
+}
+
+uint32_t Hemicube::Visible(const glm::dvec3& lo, const glm::dvec3& hi) {
+  // The box in the shooter's frame, as a box again (it only grows), and by
+  // a margin far above float rounding of the vertices: whatever is decided
+  // here for the box holds for every outcode computed for its vertices.
+  const glm::dvec3 mid = 0.5 * (lo + hi) - c_, ext = 0.5 * (hi - lo);
+  auto range = [&](const glm::dvec3& axis, double* l, double* h) {
+    const double m = glm::dot(mid, axis);
+    const double e = glm::dot(ext, glm::abs(axis)) + margin_;
+    *l = m - e;
+    *h = m + e;
+  };
+  double x0, x1, y0, y1, z0, z1;
+  range(u_, &x0, &x1);
+  range(v_, &y0, &y1);
+  range(n_, &z0, &z1);
+  if (z1 < 0) return 0;  // wholly behind the shooter
+  const int R = res_;
+  const double half = 0.5 * R;
+  uint32_t mask = 0;
+  for (int h = 0; h < 5; ++h) {
+    // (a, b, d) as ToFace orders them: d along the face's axis.
+    double a0, a1, b0, b1, d0, d1;
+    switch (h) {
+      case 0: a0 = x0; a1 = x1; b0 = y0; b1 = y1; d0 = z0; d1 = z1; break;
+      case 1: a0 = y0; a1 = y1; b0 = z0; b1 = z1; d0 = x0; d1 = x1; break;
+      case 2: a0 = y0; a1 = y1; b0 = z0; b1 = z1; d0 = -x1; d1 = -x0; break;
+      case 3: a0 = x0; a1 = x1; b0 = z0; b1 = z1; d0 = y0; d1 = y1; break;
+      default: a0 = x0; a1 = x1; b0 = z0; b1 = z1; d0 = -y1; d1 = -y0; break;
+    }
+    if (d1 < near_ || a0 > d1 || a1 < -d1 || b0 > d1 || (h == 0 ? b1 < -d1 : b1 < 0)) continue;
+    if (d0 < near_) {  // reaches the near plane: no bound on its projection
+      mask |= 1u << h;
+      continue;
+    }
+    // Pixels it may cover, a pixel wider all round than its projection,
+    // and the nearest depth anything in it may have, a little nearer still.
+    const double ya = h == 0 ? half : 0.0, rows = h == 0 ? R : R / 2;
+    auto px = [&](double v, double off, double lim) {
+      return std::clamp(v * half + off, -1.0, lim + 1.0);
+    };
+    const int xa = std::max(0, int(std::floor(px(a0 / (a0 >= 0 ? d1 : d0), half, R))) - 1);
+    const int xb = std::min(R, int(std::ceil(px(a1 / (a1 >= 0 ? d0 : d1), half, R))) + 1);
+    const int ra = std::max(0, int(std::floor(px(b0 / (b0 >= 0 ? d1 : d0), ya, rows))) - 1);
+    const int rb = std::min(int(rows), int(std::ceil(px(b1 / (b1 >= 0 ? d0 : d1), ya, rows))) + 1);
+    if (xa >= xb || ra >= rb) continue;  // between pixel centres
+    if (Open(h, xa, xb, ra, rb, float(1.001 / d0))) mask |= 1u << h;
+  }
+  return mask;
+}
+
+void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
+  const CacheFace& cf = faces_[f];
+  const float half = 0.5f * res_;
+  float *lx = lx_.data(), *ly = ly_.data(), *lz = lz_.data();
+  int nv = 0;
+  auto put = [&](const glm::dvec3& p) {
+    const glm::dvec3 d = p - c_;
+    lx[nv] = float(glm::dot(d, u_));
+    ly[nv] = float(glm::dot(d, v_));
+    lz[nv] = float(glm::dot(d, n_));
+    ++nv;
+  };
+  for (int i = cf.vb; i < cf.ve; ++i) put(mesh.verts[i]);
+  if (cf.nd)
+    for (int i : mesh.faces[cf.face].divide_verts) put(mesh.verts[i]);
+  for (int i = 0; i < nv; ++i) code_[i] = Outcodes(lx[i], ly[i], lz[i], near_);
+  // Pixel coordinates on the faces it may reach, from one reciprocal per
+  // face pair (the faces look along z, ±x, ±y). Used only where the vertex
+  // is past the near plane, so a division by 0 elsewhere is harmless.
+  if (mask & 1)
+    for (int i = 0; i < nv; ++i) {
+      const float iz = half / lz[i];
+      sx_[0][i] = lx[i] * iz + half;
+      sy_[0][i] = ly[i] * iz + half;
+    }
+  if (mask & 6)
+    for (int i = 0; i < nv; ++i) {
+      const float ix = half / lx[i];
+      sx_[1][i] = ly[i] * ix + half;
+      sy_[1][i] = lz[i] * ix;
+      sx_[2][i] = -ly[i] * ix + half;
+      sy_[2][i] = -lz[i] * ix;
+    }
+  if (mask & 24)
+    for (int i = 0; i < nv; ++i) {
+      const float iy = half / ly[i];
+      sx_[3][i] = lx[i] * iy + half;
+      sy_[3][i] = lz[i] * iy;
+      sx_[4][i] = -lx[i] * iy + half;
+      sy_[4][i] = -lz[i] * iy;
+    }
+  if (clock) {  // culling and transform so far, the rest is raster
+    const double now = MonotonicSeconds();
+    clock[1] += now - clock[0];
+    clock[0] = now;
+  }
+  // Plane of the face in shooter coordinates: dot(nl, p) = k, k < 0.
+  const glm::dvec3 nld(glm::dot(cf.normal, u_), glm::dot(cf.normal, v_), glm::dot(cf.normal, n_));
+  const float nl[3] = {float(nld.x), float(nld.y), float(nld.z)};
+  const double k = cf.offset - glm::dot(cf.normal, c_);
+  // 1/d = (na*sa + nb*sb + nd)/k with sa = X/half - 1, sb = Y/half - boff,
+  // per hemicube face: the same for every element of this face.
+  float za[5], zb[5], zc[5];
+  for (int h = 0; h < 5; ++h) {
+    if (!((mask >> h) & 1)) continue;
+    float nf[3];
+    ToFace(h, nl, nf);
+    const float boff = h == 0 ? 1.0f : 0.0f;
+    za[h] = float(nf[0] / (half * k));
+    zb[h] = float(nf[1] / (half * k));
+    zc[h] = float((nf[2] - nf[0] - nf[1] * boff) / k);
+  }
+  for (int r = cf.lb, at = cf.pb; r < cf.le; ++r, ++at) {
+    const int32_t* vid = &outline_[outline_at_[at]];
+    const int n = outline_at_[at + 1] - outline_at_[at];
+    uint32_t all = ~0u, any = 0;
+    for (int i = 0; i < n; ++i) {
+      all &= code_[vid[i]];
+      any |= code_[vid[i]];
+    }
+    for (int h = 0; h < 5; ++h) {
+      if (!((mask >> h) & 1) || ((all >> (5 * h)) & 31)) continue;  // not here, or wholly outside one plane
+      float pt[9][2];  // an 8-gon clipped by one plane
+      if (!((any >> (5 * h)) & kNear)) {
+        for (int i = 0; i < n; ++i) {
+          pt[i][0] = sx_[h][vid[i]];
+          pt[i][1] = sy_[h][vid[i]];
+        }
+        Scan(h, pt, n, za[h], zb[h], zc[h], r);
+        continue;
+      }
+      // Crosses the near plane: clip in this face's frame, then project.
+      float in[8][3], poly[9][3];
+      for (int i = 0; i < n; ++i) {
+        const float p[3] = {lx[vid[i]], ly[vid[i]], lz[vid[i]]};
+        ToFace(h, p, in[i]);
+      }
+      int m = 0;
+      for (int i = 0; i < n; ++i) {
+        const int j = (i + 1) % n;
+        const float* a = in[i];
+        const float* bq = in[j];
+        if (a[2] >= near_) std::copy(a, a + 3, poly[m++]);
+        if ((a[2] >= near_) != (bq[2] >= near_)) {
+          // Intersect from the lower vertex id: neighbours agree exactly.
+          const float* lo = vid[i] < vid[j] ? a : bq;
+          const float* hi = vid[i] < vid[j] ? bq : a;
+          const float s = (near_ - lo[2]) / (hi[2] - lo[2]);
+          poly[m][0] = lo[0] + s * (hi[0] - lo[0]);
+          poly[m][1] = lo[1] + s * (hi[1] - lo[1]);
+          poly[m][2] = near_;
+          ++m;
+        }
+      }
+      if (m < 3) continue;
+      // The same arithmetic as sx_, sy_, so unclipped corners match it bit
+      // for bit and neighbours stay watertight.
+      const float yoff = h == 0 ? half : 0.0f;
+      for (int i = 0; i < m; ++i) {
+        const float inv = half / poly[i][2];
+        pt[i][0] = poly[i][0] * inv + half;
+        pt[i][1] = poly[i][1] * inv + yoff;
+      }
+      Scan(h, pt, m, za[h], zb[h], zc[h], r);
+    }
+  }
+  visited_ += cf.le - cf.lb;
+  if (clock) {
+    const double now = MonotonicSeconds();
+    clock[2] += now - clock[0];
+    clock[0] = now;
   }
 }
 
@@ -184,167 +546,117 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
   t = glm::normalize(t - n * glm::dot(t, n));
   glm::dvec3 b = glm::cross(n, t);
   const glm::dvec3 u = std::cos(angle) * t + std::sin(angle) * b;
-  const glm::dvec3 v = glm::cross(n, u);
-
-  const float near = float(1e-5 * mesh.scene_diagonal);
-  const double coplanar = 1e-10 * (mesh.scene_diagonal + glm::length(c));
-  if (local_.size() < 3 * mesh.verts.size()) {
-    local_.resize(3 * mesh.verts.size());
-    screen_.resize(10 * mesh.verts.size());
-    code_.resize(mesh.verts.size());
-  }
-  const int R = res_;
-  const float half = 0.5f * R;
-  if (acc_.size() < mesh.elems.size()) acc_.resize(mesh.elems.size(), 0.0);
-
-  // Pass 1: faces that face the shooter; their vertices into its frame.
-  std::vector<int>& front = front_;
-  front.clear();
-  for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    const MeshFace& mf = mesh.faces[f];
-    double s = glm::dot(mf.normal, c) - mf.offset;  // shooter's height over the face
-    if (!(s > coplanar)) continue;                  // seen from behind or edge-on
-    front.push_back(int(f));
-    auto transform = [&](int i) {
-      glm::dvec3 d = mesh.verts[i] - c;
-      float* p = &local_[3 * size_t(i)];
-      p[0] = float(glm::dot(d, u));
-      p[1] = float(glm::dot(d, v));
-      p[2] = float(glm::dot(d, n));
-      code_[i] = Outcodes(p[0], p[1], p[2], near);
-      // Pixel coordinates on all five faces from three reciprocals (the
-      // faces look along z, ±x, ±y). Used only where the vertex is past
-      // the near plane, so a division by 0 elsewhere is harmless.
-      const float iz = half / p[2], ix = half / p[0], iy = half / p[1];
-      float* s = &screen_[10 * size_t(i)];
-      s[0] = p[0] * iz + half;  s[1] = p[1] * iz + half;   // top
-      s[2] = p[1] * ix + half;  s[3] = p[2] * ix;          // +x
-      s[4] = -p[1] * ix + half; s[5] = -p[2] * ix;         // -x
-      s[6] = p[0] * iy + half;  s[7] = p[2] * iy;          // +y
-      s[8] = -p[0] * iy + half; s[9] = -p[2] * iy;         // -y
-    };
-    for (int i = mf.vbegin; i < mf.vend; ++i) transform(i);
-    for (int i : mf.divide_verts) transform(i);
-  }
-  const double t1 = MonotonicSeconds();
-
-  // Pass 2: every leaf element of those faces into the item buffers.
+  c_ = c;
+  u_ = u;
+  v_ = glm::cross(n, u);
+  n_ = n;
+  near_ = float(1e-5 * mesh.scene_diagonal);
+  coplanar_ = 1e-10 * (mesh.scene_diagonal + glm::length(c));
+  margin_ = 1e-5 * mesh.scene_diagonal;
+  if (!(key_ == KeyOf(mesh))) BuildCache(mesh);
   std::fill(depth_.begin(), depth_.end(), 0.0f);
   std::fill(item_.begin(), item_.end() - 1, -1);
-  long elements = 0;
-  std::vector<int>& leaves = leaves_;
-  for (int f : front) {
-    const MeshFace& mf = mesh.faces[f];
-    // Plane of the face in shooter coordinates: dot(nl, p) = k, k < 0.
-    const glm::dvec3 nld(glm::dot(mf.normal, u), glm::dot(mf.normal, v), glm::dot(mf.normal, n));
-    const float nl[3] = {float(nld.x), float(nld.y), float(nld.z)};
-    const double k = mf.offset - glm::dot(mf.normal, c);
-    // 1/d = (na*sa + nb*sb + nd)/k with sa = X/half - 1, sb = Y/half - boff,
-    // per hemicube face: the same for every element of this face.
-    float za[5], zb[5], zc[5];
-    for (int h = 0; h < 5; ++h) {
-      float nf[3];
-      ToFace(h, nl, nf);
-      const float boff = h == 0 ? 1.0f : 0.0f;
-      za[h] = float(nf[0] / (half * k));
-      zb[h] = float(nf[1] / (half * k));
-      zc[h] = float((nf[2] - nf[0] - nf[1] * boff) / k);
-    }
-    for (int p : mf.patches) {
-      mesh.Leaves(p, &leaves);
-      for (int id : leaves) {
-        const Element& el = mesh.elems[id];
-        // The outline: corners, and T-vertices where finer neighbours meet
-        // this element, so that both sides scan the very same edges.
-        int vid[8];
-        const int nv = Outline(el, vid);
-        ++elements;
-        uint32_t all = ~0u, any = 0;
-        for (int i = 0; i < nv; ++i) {
-          all &= code_[vid[i]];
-          any |= code_[vid[i]];
-        }
-        for (int h = 0; h < 5; ++h) {
-          if ((all >> (5 * h)) & 31) continue;  // wholly outside one plane
-          float pt[9][2];  // an 8-gon clipped by one plane
-          if (!((any >> (5 * h)) & kNear)) {
-            for (int i = 0; i < nv; ++i) {
-              pt[i][0] = screen_[10 * size_t(vid[i]) + 2 * h];
-              pt[i][1] = screen_[10 * size_t(vid[i]) + 2 * h + 1];
-            }
-            Scan(h, pt, nv, za[h], zb[h], zc[h], id);
-            continue;
-          }
-          // Crosses the near plane: clip in this face's frame, then project.
-          float in[8][3], poly[9][3];
-          for (int i = 0; i < nv; ++i) ToFace(h, &local_[3 * size_t(vid[i])], in[i]);
-          int m = 0;
-          for (int i = 0; i < nv; ++i) {
-            const int j = (i + 1) % nv;
-            const float* a = in[i];
-            const float* bq = in[j];
-            if (a[2] >= near) std::copy(a, a + 3, poly[m++]);
-            if ((a[2] >= near) != (bq[2] >= near)) {
-              // Intersect from the lower vertex id: neighbours agree exactly.
-              const float* lo = vid[i] < vid[j] ? a : bq;
-              const float* hi = vid[i] < vid[j] ? bq : a;
-              const float s = (near - lo[2]) / (hi[2] - lo[2]);
-              poly[m][0] = lo[0] + s * (hi[0] - lo[0]);
-              poly[m][1] = lo[1] + s * (hi[1] - lo[1]);
-              poly[m][2] = near;
-              ++m;
-            }
-          }
-          if (m < 3) continue;
-          // The same arithmetic as screen_, so unclipped corners match it bit
-          // for bit and neighbours stay watertight.
-          const float yoff = h == 0 ? half : 0.0f;
-          for (int i = 0; i < m; ++i) {
-            const float inv = half / poly[i][2];
-            pt[i][0] = poly[i][0] * inv + half;
-            pt[i][1] = poly[i][1] * inv + yoff;
-          }
-          Scan(h, pt, m, za[h], zb[h], zc[h], id);
-        }
+  std::fill(tile_min_.begin(), tile_min_.end(), 0.0f);
+  std::fill(dirty_.begin(), dirty_.end(), 0);
+  visited_ = 0;
+
+  // Faces that face the shooter into the item buffers. With stats, the
+  // clock is read twice a face: {last reading, transform, raster} (the
+  // clear counts as raster, culling as transform).
+  double clock[3] = {MonotonicSeconds(), 0, 0};
+  clock[2] = clock[0] - t0;
+  auto draw = [&](int f, uint32_t mask) {
+    const CacheFace& cf = faces_[f];
+    const double s = glm::dot(cf.normal, c_) - cf.offset;  // shooter's height over the face
+    if (!(s > coplanar_)) return;                          // seen from behind or edge-on
+    // `mask` is its node's; a face of a few leaves is drawn under that, as
+    // testing it again would cost about what drawing it does.
+    if (culling_ && cf.le - cf.lb > 4 && !(mask = Visible(cf.lo, cf.hi))) return;
+    DrawFace(mesh, f, mask, stats ? clock : nullptr);
+  };
+  if (!culling_) {
+    for (int f : by_face_) draw(f, 31);
+  } else if (!nodes_.empty()) {
+    // Front to back, so that what is near fills the buffers before what
+    // it hides is tested.
+    stack_.assign(1, 0);
+    while (!stack_.empty()) {
+      const Node& nd = nodes_[stack_.back()];
+      const int at = stack_.back();
+      stack_.pop_back();
+      const uint32_t mask = Visible(nd.lo, nd.hi);
+      if (!mask) continue;
+      if (nd.right < 0) {
+        for (int i = nd.first; i < nd.first + nd.count; ++i) draw(i, mask);
+        continue;
       }
+      const Node &l = nodes_[at + 1], &r = nodes_[nd.right];
+      auto dist = [&](const Node& x) { return glm::length(0.5 * (x.lo + x.hi) - c_); };
+      const bool left_first = dist(l) <= dist(r);
+      stack_.push_back(left_first ? nd.right : at + 1);
+      stack_.push_back(left_first ? at + 1 : nd.right);
     }
   }
   const double t2 = MonotonicSeconds();
+  clock[1] += t2 - clock[0];  // culling after the last face drawn
 
-  // Pass 3: sum delta form factors per element, a run of equal ids at a
-  // time. Run ends are found as a bit mask per 64 pixels and visited by
-  // their set bits: no branch per pixel to mispredict at every boundary.
+  // Sum delta form factors per element, a run of equal ids at a time. Run
+  // ends are found as a bit mask per 64 pixels and visited by their set
+  // bits: no branch per pixel to mispredict at every boundary.
+  const int R = res_;
   const size_t npix = size_t(3) * R * R;
-  for (size_t row = 0, n = npix / R; row < n; ++row) {
+  for (size_t row = 0, rows = npix / R; row < rows; ++row) {
     const int32_t* it = &item_[row * R];  // it[R] is readable: next row or sentinel
     const double* pre = &prefix_[row * (R + 1)];
     int x0 = 0;
     for (int base = 0; base < R; base += 64) {
       const int len = std::min(64, R - base);
       uint64_t ends = 0;  // bit k: a run ends after pixel base + k
-      for (int k = 0; k < len; ++k)
-        ends |= uint64_t(it[base + k + 1] != it[base + k]) << k;
+      if (len == 64) {
+        // A byte per pixel (a loop that vectorises), then 8 bytes of 0/1
+        // into 8 bits by one multiply: byte k lands on bit 56 + k.
+        uint8_t ne[64];
+        for (int k = 0; k < 64; ++k) ne[k] = it[base + k + 1] != it[base + k];
+        for (int j = 0; j < 8; ++j) {
+          uint64_t x;
+          std::memcpy(&x, ne + 8 * j, 8);
+          ends |= ((x * 0x0102040810204080ull) >> 56) << (8 * j);
+        }
+      } else {
+        for (int k = 0; k < len; ++k)
+          ends |= uint64_t(it[base + k + 1] != it[base + k]) << k;
+      }
       if (base + len == R) ends |= uint64_t(1) << (len - 1);
       while (ends) {
         const int x1 = base + __builtin_ctzll(ends) + 1;
         ends &= ends - 1;
-        if (it[x0] >= 0) acc_[it[x0]] += pre[x1] - pre[x0];
+        if (it[x0] >= 0) {
+          const int32_t id = elem_[it[x0]];
+          acc_[id] += pre[x1] - pre[x0];
+          touched_[id >> 6] |= uint64_t(1) << (id & 63);
+        }
         x0 = x1;
       }
     }
   }
+  // In increasing id by the touched bits: a word per 64 elements, not a
+  // read of every element's sum.
   out->clear();
-  for (size_t id = 0; id < mesh.elems.size(); ++id)
-    if (acc_[id] > 0) {
-      out->push_back({int32_t(id), float(acc_[id])});
+  for (size_t w = 0; w < touched_.size(); ++w) {
+    uint64_t bits = touched_[w];
+    touched_[w] = 0;
+    for (; bits; bits &= bits - 1) {
+      const size_t id = 64 * w + __builtin_ctzll(bits);
+      if (acc_[id] > 0) out->push_back({int32_t(id), float(acc_[id])});
       acc_[id] = 0;
     }
+  }
   const double t3 = MonotonicSeconds();
   if (stats) {
-    stats->transform_s += t1 - t0;
-    stats->raster_s += t2 - t1;
+    stats->transform_s += clock[1];
+    stats->raster_s += clock[2];
     stats->readback_s += t3 - t2;
-    stats->elements += elements;
+    stats->elements += visited_;
     stats->covered += long(out->size());
     stats->pixels += long(npix);
   }

@@ -9,7 +9,18 @@
 // into the shooter's frame (relative coordinates, so precision does not
 // depend on where the scene sits or on its units); each element's form
 // factor is summed in double and handed out as float (7 digits are more
-// than the hemicube's own accuracy of about 1/R²).
+// than the hemicube's own accuracy of about 1/R²). The culling tests are
+// done in double on boxes grown by a margin far above float rounding, so
+// that a face is skipped only where none of its float pixels could win.
+//
+// Cost: faces are reached through a bounding-volume hierarchy, front to
+// back; a node or face is skipped whole when it lies behind the shooter,
+// outside every hemicube face, or behind the depths already drawn (a
+// kTile-pixel tile's least depth, then pixels). So a column costs about
+// its visible faces and its pixels, not the scene: the maze or a room of
+// boxes leaves most of its elements unread. The item buffer holds leaf
+// ranks (their order in the flat copy), which break depth ties as the
+// plain face-order z-buffer did.
 #ifndef RADIOSITY_HEMICUBE_H
 #define RADIOSITY_HEMICUBE_H
 
@@ -28,7 +39,7 @@ struct ColumnStats {
   double transform_s = 0;  // face culling, vertex transform and outcodes
   double raster_s = 0;     // clear, clip, project, scan-convert
   double readback_s = 0;   // item buffer -> form factors
-  long elements = 0;       // leaf elements on front-facing faces
+  long elements = 0;       // leaf elements visited (on faces not culled)
   long covered = 0;        // elements with F > 0
   long pixels = 0;         // hemicube pixels (3 R²)
 };
@@ -44,23 +55,97 @@ class Hemicube {
   void Column(const Mesh& mesh, int shooter, double angle,
               std::vector<FormFactor>* out, ColumnStats* stats = nullptr);
 
+  // Culling on (the default): faces are visited front to back through a
+  // bounding-volume hierarchy and skipped, with their elements unread,
+  // where they lie wholly behind the shooter, outside a hemicube face or
+  // behind what that face's item buffer already holds. Off: every
+  // front-facing face on every hemicube face, in face order, as a plain
+  // z-buffer would. The columns are the same either way (the tests compare
+  // them): culled faces could not have won a pixel, and depth ties go to
+  // the element drawn first in face order whatever order they are drawn in.
+  void set_culling(bool on) { culling_ = on; }
+
   static constexpr int kMaxResolution = 4096;
 
  private:
+  // The mesh as the column reads it, rebuilt when the mesh changes (built,
+  // divided, replaced): flat, in the order it is read, with each face's
+  // vertices and leaves contiguous and every leaf's outline precomputed.
+  struct CacheFace {
+    glm::dvec3 normal{0.0};
+    double offset = 0;
+    glm::dvec3 lo{0.0}, hi{0.0};  // bounding box of its vertices
+    int face = -1;                // in the mesh
+    int vb = 0, ve = 0;           // its vertices: Mesh::verts[vb, ve)
+    int nd = 0;                   // and its divide_verts' count
+    int lb = 0, le = 0;           // its leaves' ranks: [lb, le)
+    int pb = 0;                   // its first leaf's outline_at_ slot
+  };
+  struct Node {                   // of the hierarchy over faces, depth first
+    glm::dvec3 lo{0.0}, hi{0.0};
+    int first = 0, count = 0;     // a leaf: faces_[first, first + count)
+    int right = -1;               // an inner node: its second child (first is next)
+  };
+  struct Key {
+    const Mesh* mesh = nullptr;
+    const void* verts = nullptr;
+    const void* elems = nullptr;
+    size_t nverts = 0, nelems = 0, nfaces = 0;
+    int divided = -1;
+    glm::dvec3 first{0.0}, last{0.0};
+    bool operator==(const Key& o) const;
+  };
+  static Key KeyOf(const Mesh& mesh);
+  void BuildCache(const Mesh& mesh);
+  // Nodes over faces[order[first, first + count)], reordering `order`.
+  int BuildNodes(const std::vector<CacheFace>& faces, std::vector<int>* order, int first,
+                 int count);
+  // The hemicube faces (5 bits) box [lo, hi] may cover visibly: not
+  // wholly behind the shooter, outside the face or behind its buffer.
+  uint32_t Visible(const glm::dvec3& lo, const glm::dvec3& hi);
+  bool Open(int h, int xa, int xb, int ra, int rb, float zt);
+  // Its vertices into the shooter's frame, its leaves into the buffers of
+  // the hemicube faces in `mask`; adds to clock's stages when non-null.
+  void DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock);
   void Scan(int face, const float (*pt)[2], int n, float za, float zb, float zc,
-            int32_t id);
+            int32_t rank);
 
   int res_;
+  bool culling_ = true;
   // Delta form factors as prefix sums along each row (R + 1 per row):
   // the top face's R rows, then 4 side faces of R/2 rows.
   std::vector<double> prefix_;
   std::vector<float> depth_;  // 1/distance, larger is nearer; 0 = empty
-  std::vector<int32_t> item_; // element id or -1
-  std::vector<float> local_;  // 3 floats per vertex, in the shooter frame
-  std::vector<float> screen_; // 10 floats per vertex: pixel x, y on each face
-  std::vector<uint32_t> code_;// outcodes per vertex, 5 bits per face
-  std::vector<double> acc_;   // per element
-  std::vector<int> front_, leaves_;  // scratch, kept to avoid reallocation
+  std::vector<int32_t> item_; // leaf rank or -1
+  // Per kTile x kTile pixels of each face (the top's, then the sides'):
+  // the least depth, valid where dirty_ is 0 (Scan sets it on writing).
+  static constexpr int kTile = 8;
+  std::vector<float> tile_min_;
+  std::vector<uint8_t> dirty_;
+
+  Key key_;
+  // Faces with leaves in the hierarchy's order, and their outlines in that
+  // order: a column reads them front to back, nearly in memory order. The
+  // vertices are the mesh's own (a face's are contiguous there but for
+  // those Divide added), not copied: that would cost 24 bytes a vertex.
+  std::vector<CacheFace> faces_;
+  std::vector<int32_t> by_face_;   // faces_ indices in mesh face order
+  std::vector<int32_t> elem_;      // rank -> element id; ranks in face order
+  std::vector<int32_t> outline_;   // face-relative vertex indices
+  std::vector<int32_t> outline_at_;// leaf k's outline: [at[k], at[k + 1])
+  std::vector<Node> nodes_;
+
+  // Per column: the shooter's frame and per-face scratch.
+  glm::dvec3 c_{0.0}, u_{0.0}, v_{0.0}, n_{0.0};
+  float near_ = 0;
+  double coplanar_ = 0, margin_ = 0;
+  std::vector<float> lx_, ly_, lz_;  // face vertices in the shooter frame
+  std::vector<uint32_t> code_;       // outcodes per vertex, 5 bits per face
+  std::vector<float> sx_[5], sy_[5]; // pixel x, y on each hemicube face
+  std::vector<int> stack_;
+  std::vector<double> acc_;          // per element
+  std::vector<uint64_t> touched_;    // per element: acc_ non-zero
+  long visited_ = 0;                 // leaves drawn this column
 };
 
 // The hemicube angle for the k-th shot of patch p: a hash, so that any

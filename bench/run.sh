@@ -3,7 +3,9 @@
 #   sh bench/run.sh [all|engine|parallel|quick]     (default: all)
 # engine: the shipped scenes at R = 128 and 256 (bench/engine.sh: column
 #  times against the cost model, shots and seconds to 1% relative RMS,
-#  rows in bench/results/columns.csv and converge.csv), then subdivision
+#  rows in bench/results/columns.csv and converge.csv), the column at 10^3
+#  to 10^6 elements before and after culling (bench/column.sh, rows in
+#  bench/results/column-scale.csv), then subdivision
 #  and waves (bench/waves.sh) and ssh workers (bench/ssh.sh).
 # parallel: the paper's section 5 (build/radiosity-parallel, a few minutes):
 #  graphs 1-2 from real runs with a worker process of ./radiosity, graphs 3-5
@@ -23,6 +25,8 @@ case $what in all|engine|parallel|quick) ;; *) echo "usage: sh bench/run.sh [all
 
 if [ "$what" = all ] || [ "$what" = engine ]; then
   sh bench/engine.sh || exit 1
+  echo
+  sh bench/column.sh || exit 1
   echo
   sh bench/waves.sh
   bash bench/ssh.sh

@@ -548,10 +548,7 @@ TEST(FfCodec, ColumnSumIsKeptByErrorDiffusion) {
 
 // Real columns: the hemicube of the shipped room from patches all over it.
 TEST(FfCodec, RealColumnsCostLessThanFiveBytesPerFormFactor) {
-  std::string path = __FILE__;
-  path = path.substr(0, path.find_last_of('/') + 1) + "../scenes/room.obj";
-  struct stat st;
-  if (stat(path.c_str(), &st) != 0) path = "scenes/room.obj";
+  const std::string path = ShippedScenePath("room");
   Scene scene;
   std::string err;
   std::vector<std::string> warnings;

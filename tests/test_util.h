@@ -2,7 +2,10 @@
 #ifndef RADIOSITY_TESTS_TEST_UTIL_H
 #define RADIOSITY_TESTS_TEST_UTIL_H
 
+#include <sys/stat.h>
+
 #include <cstdlib>
+#include <string>
 #include <vector>
 
 #include "mesh.h"
@@ -63,6 +66,16 @@ inline Mesh MakeMesh(const Scene& s, MeshOptions o = MeshOptions()) {
   std::string err;
   if (!BuildMesh(s, o, &m, &err)) std::abort();
   return m;
+}
+
+// A shipped scene's OBJ: beside the tests' sources, or from the top
+// directory when they were moved.
+inline std::string ShippedScenePath(const std::string& name) {
+  std::string path = __FILE__;
+  path = path.substr(0, path.find_last_of('/') + 1) + "../scenes/" + name + ".obj";
+  struct stat st;
+  if (stat(path.c_str(), &st) != 0) path = "scenes/" + name + ".obj";
+  return path;
 }
 
 #endif

@@ -1,0 +1,75 @@
+// radiosity-column: the form-factor column alone, at any scene size, as
+// one table row on stdout (bench/column.sh adds the headers and runs it
+// for the program before and after a change, side by side).
+//   radiosity-column SCENE.obj R COLUMNS [PATCH_SIZE [ELEMENTS_PER_PATCH]]
+// COLUMNS shooters spread evenly over the patches; per column: CPU time,
+// split into the stages in the proportions ColumnStats measures, the cost
+// model (15 ns/element + 70 ns/covered element + 3 ns/pixel) and how many
+// elements the column visited (on faces it did not cull) out of all. Uses only what
+// hemicube.h has had since the cost model was set, so that the same file
+// builds against the old column for the before figures.
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "clock.h"
+#include "hemicube.h"
+#include "mesh.h"
+#include "scene.h"
+
+int main(int argc, char** argv) {
+  if (argc < 4) {
+    std::fprintf(stderr,
+                 "usage: radiosity-column SCENE.obj R COLUMNS [PATCH_SIZE [ELEMENTS_PER_PATCH]]\n");
+    return 2;
+  }
+  Scene scene;
+  std::string err;
+  std::vector<std::string> warnings;
+  if (!LoadScene(argv[1], &scene, &err, &warnings)) {
+    std::fprintf(stderr, "radiosity-column: %s\n", err.c_str());
+    return 2;
+  }
+  MeshOptions mo;
+  if (argc > 4) mo.patch_size = std::atof(argv[4]);
+  if (argc > 5) mo.elements_per_patch = std::atoi(argv[5]);
+  Mesh mesh;
+  if (!BuildMesh(scene, mo, &mesh, &err)) {
+    std::fprintf(stderr, "radiosity-column: %s\n", err.c_str());
+    return 2;
+  }
+  std::string name = argv[1];
+  name = name.substr(name.find_last_of('/') + 1);
+  const int res = std::atoi(argv[2]);
+  const int want = std::max(1, std::atoi(argv[3]));
+  Hemicube hc(res);
+  std::vector<FormFactor> col;
+  const int n = int(mesh.patches.size());
+  const int step = std::max(1, n / want);
+  // One column first, untimed: buffers and any per-mesh setup are a
+  // once-per-run cost, not a column's.
+  ShotColumn(&hc, mesh, 0, 0, true, 1, &col);
+  // Twice over the same shooters: without stats for the time (the stage
+  // clocks cost a little per face), then with them for the split, shown as
+  // shares of that time (CPU time: the machine may be shared).
+  int columns = 0;
+  const double t0 = ThreadCpuSeconds();
+  for (int p = 0; p < n && columns < want; p += step, ++columns)
+    ShotColumn(&hc, mesh, p, 0, true, 1, &col);
+  const double per = (ThreadCpuSeconds() - t0) / columns;
+  ColumnStats st;
+  for (int p = 0, c = 0; p < n && c < want; p += step, ++c)
+    ShotColumn(&hc, mesh, p, 0, true, 1, &col, &st);
+  const double staged = std::max(1e-12, st.transform_s + st.raster_s + st.readback_s);
+  const double elems = double(mesh.elems.size());
+  const double model =
+      (15e-9 * elems * columns + 70e-9 * double(st.covered) + 3e-9 * double(st.pixels)) / columns;
+  std::printf("%s | %d | %.0f | %.0f | %.1f%% | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f\n",
+              name.c_str(), res, elems, double(st.covered) / columns,
+              100.0 * double(st.elements) / columns / elems, 1e3 * per,
+              1e3 * per * st.transform_s / staged, 1e3 * per * st.raster_s / staged,
+              1e3 * per * st.readback_s / staged, 1e3 * model, per / model);
+  return 0;
+}

@@ -1,0 +1,73 @@
+#!/bin/sh
+# The form-factor column at scale: ms per column (CPU time) split into
+# stages, against the cost model 15 ns/element + 70 ns/covered element +
+# 3 ns/pixel (3 R² pixels), before and after side by side, at about 10^3,
+# 10^4, 10^5 and 10^6 elements, on generated rooms of boxes (build/scenegen
+# boxes N) and the Cornell box cut K x K and triangulated (scenegen
+# tessellate); "visited" is the share of elements on faces the column did
+# not cull (before: every front-facing face).
+#   sh bench/column.sh [quick]       quick: up to 10^5 elements
+# BEFORE=REV (default 5298a27, the column before culling): REV's
+# hemicube.{h,cpp} built with bench/column.cpp against this tree's other
+# objects into bench/results/tmp/ (a note instead if that no longer builds).
+# R: resolution (default 256); COLUMNS: shooters per scene (default 40).
+# Scenes are generated once into bench/results/tmp/scenes/ (not in git).
+cd "$(dirname "$0")/.." || exit 1
+mode=${1:-full}
+res=${R:-256}
+n=${COLUMNS:-40}
+rev=${BEFORE:-5298a27}
+for b in build/radiosity-column build/scenegen build/clock.o build/scene.o build/mesh.o; do
+  [ -e "$b" ] || { echo "bench/column.sh: $b missing: run make build/radiosity-column build/scenegen" >&2; exit 1; }
+done
+dir=bench/results/tmp/scenes
+old=bench/results/tmp/column-$rev
+mkdir -p "$dir" "$old"
+if [ ! -x "$old/radiosity-column" ]; then
+  flags="$(pkg-config --cflags glm stb 2>/dev/null) -O2 -std=c++17"
+  # shellcheck disable=SC2086 # flags
+  { git show "$rev:hemicube.cpp" >"$old/hemicube.cpp" && git show "$rev:hemicube.h" >"$old/hemicube.h" &&
+    ${CXX:-g++} $flags -I"$old" -I. -c -o "$old/hemicube.o" "$old/hemicube.cpp" &&
+    ${CXX:-g++} $flags -I"$old" -I. -c -o "$old/column.o" bench/column.cpp &&
+    ${CXX:-g++} -o "$old/radiosity-column" "$old/column.o" build/clock.o build/scene.o build/mesh.o \
+      "$old/hemicube.o" -lpthread; } >"$old/build.log" 2>&1 || rm -f "$old/radiosity-column"
+fi
+
+scene() {  # NAME: generated on first use
+  f=$dir/$1.obj
+  if [ ! -s "$f" ]; then
+    case $1 in
+      boxes*) ./build/scenegen boxes "${1#boxes}" "$f" >/dev/null ;;
+      cornell*t) k=${1#cornell}; ./build/scenegen tessellate scenes/cornell.obj "${k%t}" "$f" --tri >/dev/null ;;
+    esac || exit 1
+  fi
+  echo "$f"
+}
+
+list="boxes20 cornell1t boxes1000 cornell3t boxes10000 cornell24t"
+[ "$mode" = quick ] || list="$list boxes40000 cornell80t"
+echo "Form-factor column at scale (R = $res, ms per column, CPU time, mean over $n shooters; before: $rev)"
+echo "| scene | elements | covered | model | before | before/model | before visited | after | after/model | after visited | transform | raster | readback |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+rows=$(mktemp)
+trap 'rm -f "$rows"' EXIT
+for s in $list; do
+  f=$(scene "$s") || exit 1
+  # Fields: name R elements covered visited ms transform raster readback model ratio
+  after=$(./build/radiosity-column "$f" "$res" "$n") || exit 1
+  before="- | - | - | - | - | - | - | - | - | - | -"
+  [ -x "$old/radiosity-column" ] && { before=$("$old/radiosity-column" "$f" "$res" "$n") || exit 1; }
+  echo "$before|$after" | awk -F' [|] |[|]' -v s="$s" '
+    { printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n",
+        s, $14, $15, $21, $6, $11, $5, $17, $22, $16, $18, $19, $20 }'
+  echo "$s,$before,$after" | tr -d ' ' | tr '|' ',' >>"$rows"
+done
+[ -x "$old/radiosity-column" ] || echo "(before: $rev's column did not build against this tree: $old/build.log)"
+R_DIR=${RESULTS:-bench/results}
+mkdir -p "$R_DIR"
+{
+  echo "scene,b_name,b_R,b_elements,b_covered,b_visited,b_ms,b_transform_ms,b_raster_ms,b_readback_ms,b_model_ms,b_ratio,name,R,elements,covered,visited,ms,transform_ms,raster_ms,readback_ms,model_ms,ratio"
+  cat "$rows"
+} >"$R_DIR/column-scale.csv"
+echo
+echo "CSV: $R_DIR/column-scale.csv"
