@@ -82,7 +82,7 @@ class Scheduler {
             const std::function<void(const Sample&)>& sample,
             const std::function<void(const std::string&, bool)>& note)
       : mesh_(*mesh), mutable_mesh_(mesh), opts_(opts), solver_(solver), sub_(sub), t_(t),
-        first_(t), sample_(sample), note_(note), taken_(mesh->patches.size(), 0) {
+        first_(t), sample_(sample), note_(note) {
     if (const RunState* r = opts.resume) {
       wave_ = r->wave;
       wave_start_ = r->wave_start;
@@ -147,7 +147,6 @@ class Scheduler {
   std::unique_ptr<Transport> fallback_;
   const std::function<void(const Sample&)>& sample_;
   const std::function<void(const std::string&, bool)>& note_;
-  std::vector<char> taken_;           // owned by a worker, or its column waits
   std::vector<Slot> slots_;
   struct Ready {
     proto::Column column;
@@ -175,9 +174,9 @@ int Scheduler::NextPatch() {
   while (!pending_.empty()) {
     const int p = pending_.front();
     pending_.pop_front();
-    if (p >= 0 && size_t(p) < taken_.size() && !taken_[p]) return p;
+    if (p >= 0 && size_t(p) < mesh_.patches.size() && !solver_->Taken(p)) return p;
   }
-  return solver_->Select(&taken_);
+  return solver_->Select();
 }
 
 RunState Scheduler::State() {
@@ -224,8 +223,8 @@ void Scheduler::Sizes(Slot* s, int workers) const {
 }
 
 void Scheduler::Release(Slot* s) {
-  for (const Slot::Sent& x : s->sent) taken_[x.a.patch] = 0;
-  for (int p : s->prepared) taken_[p] = 0;
+  for (const Slot::Sent& x : s->sent) solver_->Release(x.a.patch);
+  for (int p : s->prepared) solver_->Release(p);
   s->sent.clear();
   s->prepared.clear();
 }
@@ -293,7 +292,7 @@ void Scheduler::Distribute() {
       if (!s.alive || s.Queued() >= size_t(s.high)) continue;
       const int p = NextPatch();
       if (p < 0) break;  // nothing left with power to shoot: send what is prepared
-      taken_[p] = 1;
+      solver_->Take(p);  // owned by this worker until shot or lost
       s.prepared.push_back(p);
       more = true;
     }
@@ -448,7 +447,7 @@ void Scheduler::ShootNext() {
   ready_.pop_front();
   if (from) --from->waiting;
   solver_->Shoot(c.patch, c.ff);
-  taken_[c.patch] = 0;
+  solver_->Release(c.patch);
   ++r_.columns;
   unshot_ = solver_->UnshotFraction();
   r_.shoot_s += MonotonicSeconds() - t0;
