@@ -43,6 +43,9 @@ $(B)/radiosity-parallel: $(B)/bench/parallel.o $(LIB_OBJS) $(SIM_OBJS)
 $(B)/radiosity-waves: $(B)/bench/waves.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
+$(B)/radiosity-master: $(B)/bench/master.o $(LIB_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
 # Big generated scenes (rooms of boxes, tessellated shipped scenes) for
 # benchmarks and tests; a stand-alone tool, linked with none of the program.
 $(B)/scenegen: $(B)/bench/scenegen.o
@@ -84,14 +87,14 @@ demo: deps
 
 bench: deps
 	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
-	  $(B)/radiosity-waves $(B)/scenegen
+	  $(B)/radiosity-waves $(B)/radiosity-master $(B)/scenegen
 	@sh bench/run.sh
 
 # The paper's measurements with this machine's cores, written up as
 # bench/results/report.md (about 10 minutes; run it on an idle machine).
 report: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
-	  $(B)/radiosity-waves $(B)/scenegen
+	  $(B)/radiosity-waves $(B)/radiosity-master $(B)/scenegen
 	@sh bench/report
 
 install: radiosity
