@@ -16,11 +16,12 @@ namespace {
 // replace *edits (what workers must apply alike). Returns true when the
 // wave is over.
 bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wave,
-            std::vector<int32_t>* edits) {
+            std::vector<int32_t>* changed, std::vector<int32_t>* edits) {
   edits->clear();
   if (!subdivider->Due(shots_in_wave)) return false;
   const double t0 = ThreadCpuSeconds();
-  *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->Ambient(), shots_in_wave);
+  solver->TakeChanged(changed);
+  *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->Ambient(), shots_in_wave, *changed);
   for (int32_t e : *edits) Divide(mesh, e);
   solver->Divided(*edits);
   subdivider->CountTime(ThreadCpuSeconds() - t0);
@@ -163,6 +164,7 @@ class Scheduler {
   int wave_ = 1;
   long wave_start_ = 0;               // shots before this wave
   std::vector<int32_t> edits_;
+  std::vector<int32_t> changed_;      // Refine's scratch
   std::deque<int> pending_;           // RunState::pending of a resumed run
   double last_checkpoint_ = 0;        // on t_'s clock
   RunResult r_;
@@ -361,7 +363,8 @@ void Scheduler::Subdivide() {
   for (const Slot& s : slots_)
     if (s.alive && Pipelined() && s.Queued() < size_t(s.low)) return;
   const double t0 = MonotonicSeconds();
-  const bool over = Refine(mutable_mesh_, solver_, sub_, solver_->shots() - wave_start_, &edits_);
+  const bool over =
+      Refine(mutable_mesh_, solver_, sub_, solver_->shots() - wave_start_, &changed_, &edits_);
   if (!edits_.empty()) t_->Divide(edits_);
   r_.subdivide_s += MonotonicSeconds() - t0;
   if (over) NextWave();

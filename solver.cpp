@@ -57,10 +57,13 @@ void Solver::Grow() {
   b_.resize(n);
   rho_per_area_.resize(n);
   patch_of_.resize(n);
-  for (size_t e = 0; e < n; ++e) {
+  is_changed_.resize(n, 0);
+  // Only added elements and their parents (divided since): O(divisions).
+  for (size_t e = from; e < n; ++e) {
     const Element& el = mesh_.elems[e];
-    if (e >= from) rho_per_area_[e] = mesh_.FaceOf(int(e)).rho / el.area;
+    rho_per_area_[e] = mesh_.FaceOf(int(e)).rho / el.area;
     patch_of_[e] = el.IsLeaf() ? el.patch : ~el.patch;
+    if (el.parent >= 0 && size_t(el.parent) < from) patch_of_[size_t(el.parent)] = ~el.patch;
   }
 }
 
@@ -186,11 +189,15 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     const double f = double(col[i].f);
     if (q >= 0) {
       b_[e] += xa * (f * rho_per_area_[e]);
+      Changed(e);
     } else {  // divided since the column was computed: each leaf gains alike
       q = ~q;
       mesh_.LeavesUnder(e, &leaves_);
       const glm::dvec3 gain = xa * (f * rho_per_area_[e]);
-      for (int l : leaves_) b_[l] += gain;
+      for (int l : leaves_) {
+        b_[l] += gain;
+        Changed(l);
+      }
     }
     if (fsum_[q] == 0) touched_.push_back(q);
     fsum_[q] += f;
@@ -220,10 +227,19 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   if (++shots_ % long(unshot_.size()) == 0) Resum();
 }
 
+void Solver::TakeChanged(std::vector<int32_t>* out) {
+  out->swap(changed_);
+  changed_.clear();
+  for (int32_t e : *out) is_changed_[size_t(e)] = 0;
+}
+
 void Solver::Divided(const std::vector<int32_t>& elems) {
   Grow();
   for (int32_t p : elems)
-    for (int k = 0; k < kChildren; ++k) b_[mesh_.elems[p].first_child + k] = b_[p];
+    for (int k = 0; k < kChildren; ++k) {
+      b_[mesh_.elems[p].first_child + k] = b_[p];
+      Changed(mesh_.elems[p].first_child + k);
+    }
   // Fitted to the values as they are now (elements divided in this pass
   // hold their parent's), so the order of `elems` does not matter.
   std::vector<glm::dvec3> shaped(kChildren * elems.size());

@@ -59,6 +59,11 @@ class Solver {
   // to every leaf under it alike.
   void Shoot(int p, const std::vector<FormFactor>& column);
 
+  // The elements whose radiosity changed since the last call (each once;
+  // those Divided() made included), into *out: what a division pass needs
+  // to look at again (Subdivider::Pass).
+  void TakeChanged(std::vector<int32_t>* out);
+
   // Divide() was applied to the mesh for these elements (in this order):
   // their children get the parent's radiosity shaped by its gradient
   // (paper §4.4), fitted to the neighbours and limited to their range,
@@ -90,6 +95,12 @@ class Solver {
   double Power(int p, const glm::dvec3& ambient) const;
   double Bound(int p) const;
   void Rebase();
+  void Changed(int32_t e) {
+    if (!is_changed_[size_t(e)]) {
+      is_changed_[size_t(e)] = 1;
+      changed_.push_back(e);
+    }
+  }
   void Resum();
   void Grow();
 
@@ -104,6 +115,8 @@ class Solver {
   std::vector<glm::dvec3> unshot_;  // per patch
   std::vector<double> fsum_;        // per patch: Σ F within one Shoot
   std::vector<int32_t> touched_;    // patches with fsum_ != 0
+  std::vector<uint8_t> is_changed_; // per element: in changed_
+  std::vector<int32_t> changed_;    // elements whose B changed, for TakeChanged
   std::vector<uint8_t> lit_;        // per patch: emits, or light reached it
   std::vector<uint8_t> blind_;      // per patch: its column was empty
   std::vector<int> times_shot_;

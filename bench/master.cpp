@@ -1,13 +1,14 @@
 // radiosity-master: the master's own work per shot on one scene, as one
 // table row on stdout (bench/master.sh adds the headers).
-//   radiosity-master SCENE.obj SHOTS [R] [--no-overshoot] [--divide]
+//   radiosity-master SCENE.obj SHOTS [R] [--no-overshoot] [--divide [--every-leaf]]
 // Each shot as the master does it with workers: select the next patch,
 // decode the column that comes back (the frame a worker sends, made here
 // by ShotColumn and EncodeColumn, which are not timed: a worker's work),
 // shoot it. Timed on the monotonic clock per part and compared with issue
 // 14's target, 10 us + 5 ns per covered element (form factors in the
 // column). --divide: a division pass every 10 shots after the first 20
-// (without waves), timed per pass, with the leaves it looked at.
+// (without waves), timed per pass, with the share of the leaves it
+// evaluated; --every-leaf: every leaf every pass, as before issue 14.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -31,10 +32,11 @@ int main(int argc, char** argv) {
   }
   const long shots = std::atol(argv[2]);
   int res = 256;
-  bool overshoot = true, divide = false;
+  bool overshoot = true, divide = false, every_leaf = false;
   for (int i = 3; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--no-overshoot")) overshoot = false;
     else if (!std::strcmp(argv[i], "--divide")) divide = true;
+    else if (!std::strcmp(argv[i], "--every-leaf")) every_leaf = true;
     else res = std::atoi(argv[i]);
   }
   Scene scene;
@@ -73,12 +75,14 @@ int main(int argc, char** argv) {
       solver.Shoot(p, got.ff);
     }
   }
-  double select_s = HUGE_VAL / 4, decode_s = 0, shoot_s = 0, pass_s = 0, pass_max = 0;
-  long covered = 0, done = 0, passes = 0, divided = 0;
+  double select_s = HUGE_VAL / 4, decode_s = 0, shoot_s = 0, pass_s = 0, pass_max = 0, policy_s = 0;
+  long covered = 0, done = 0, passes = 0, divided = 0, evaluated = 0, leaves = 0;
+  std::vector<int32_t> changed;
   for (int round = 0; round < (divide ? 1 : 3); ++round) {
     Solver solver(mesh, overshoot);
     SubdivideOptions so;
     so.waves = false;
+    so.incremental = !every_leaf;
     Subdivider sub(&mesh, so);
     proto::Column got;
     proto::FrameReader reader;
@@ -110,12 +114,16 @@ int main(int argc, char** argv) {
       // The recorded columns predate the divisions, as columns from
       // workers may: Shoot gives a divided element's share to its leaves.
       if (divide && sub.Due(done + 1)) {
-        t0 = MonotonicSeconds();
+        t0 = ThreadCpuSeconds();  // a pass takes milliseconds: the CPU clock's cost is nothing
+        solver.TakeChanged(&changed);
         const std::vector<int32_t> edits =
-            sub.Pass(mesh, solver.radiosity(), solver.Ambient(), done + 1);
+            sub.Pass(mesh, solver.radiosity(), solver.Ambient(), done + 1, changed);
+        evaluated += sub.evaluated();
+        leaves += mesh.LeafCount();
+        policy_s += ThreadCpuSeconds() - t0;
         for (int32_t e : edits) Divide(&mesh, e);
         solver.Divided(edits);
-        const double t = MonotonicSeconds() - t0;
+        const double t = ThreadCpuSeconds() - t0;
         pass_s += t;
         pass_max = std::max(pass_max, t);
         ++passes;
@@ -144,7 +152,9 @@ int main(int argc, char** argv) {
               1e6 * select_s / n, 1e6 * decode_s / n, 1e6 * shoot_s / n, total,
               10 + 0.005 * per, 1e3 * (total - 10) / std::max(1.0, per));
   if (divide)
-    std::printf(" %ld | %ld | %.2f | %.2f |", passes, divided,
+    std::printf(" %ld | %ld | %.3f | %.2f | %.2f | %.2f |", passes, divided,
+                double(evaluated) / double(std::max(1L, leaves)),
+                1e3 * policy_s / double(std::max(1L, passes)),
                 1e3 * pass_s / double(std::max(1L, passes)), 1e3 * pass_max);
   std::printf("\n");
   return 0;
