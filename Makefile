@@ -46,6 +46,9 @@ $(B)/radiosity-waves: $(B)/bench/waves.o $(LIB_OBJS)
 $(B)/radiosity-master: $(B)/bench/master.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
+$(B)/radiosity-cluster: $(B)/bench/cluster.o $(LIB_OBJS) $(SIM_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
 # Big generated scenes (rooms of boxes, tessellated shipped scenes) for
 # benchmarks and tests; a stand-alone tool, linked with none of the program.
 $(B)/scenegen: $(B)/bench/scenegen.o
@@ -87,14 +90,14 @@ demo: deps
 
 bench: deps
 	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
-	  $(B)/radiosity-waves $(B)/radiosity-master $(B)/scenegen
+	  $(B)/radiosity-waves $(B)/radiosity-master $(B)/radiosity-cluster $(B)/scenegen
 	@sh bench/run.sh
 
 # The paper's measurements with this machine's cores, written up as
 # bench/results/report.md (about 10 minutes; run it on an idle machine).
 report: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
-	  $(B)/radiosity-waves $(B)/radiosity-master $(B)/scenegen
+	  $(B)/radiosity-waves $(B)/radiosity-master $(B)/radiosity-cluster $(B)/scenegen
 	@sh bench/report
 
 install: radiosity

@@ -180,10 +180,6 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
       __builtin_prefetch(&rho_per_area_[size_t(a)]);
       __builtin_prefetch(&patch_of_[size_t(a)]);
     }
-    if (i + kAhead / 2 < n) {  // its patch_of_ fetched kAhead / 2 ago
-      const int32_t q = patch_of_[size_t(col[i + kAhead / 2].elem)];
-      __builtin_prefetch(&fsum_[size_t(q < 0 ? ~q : q)], 1);
-    }
     const int32_t e = col[i].elem;
     int32_t q = patch_of_[e];
     const double f = double(col[i].f);
