@@ -18,7 +18,7 @@ NPROC    := $(shell nproc 2>/dev/null || echo 1)
 SAN      := -O1 -g1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := options.cpp app.cpp clock.cpp scene.cpp mesh.cpp hemicube.cpp subdivide.cpp solver.cpp scheduler.cpp results.cpp image.cpp coding.cpp ffcodec.cpp protocol.cpp version.cpp inprocess.cpp pool.cpp worker.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp files.cpp
+LIB_SRCS  := options.cpp app.cpp clock.cpp scene.cpp mesh.cpp hemicube.cpp subdivide.cpp solver.cpp shooters.cpp scheduler.cpp results.cpp image.cpp coding.cpp ffcodec.cpp protocol.cpp version.cpp inprocess.cpp pool.cpp worker.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp files.cpp
 # Only for the unit tests and the benchmarks, never in the program.
 SIM_SRCS  := sim.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)
@@ -45,6 +45,12 @@ $(B)/radiosity-parallel: $(B)/bench/parallel.o $(LIB_OBJS) $(SIM_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 $(B)/radiosity-waves: $(B)/bench/waves.o $(LIB_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(B)/radiosity-master: $(B)/bench/master.o $(LIB_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(B)/radiosity-cluster: $(B)/bench/cluster.o $(LIB_OBJS) $(SIM_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 # Big generated scenes (rooms of boxes, tessellated shipped scenes) for
@@ -93,14 +99,14 @@ demo: deps
 
 bench: deps
 	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
-	  $(B)/radiosity-waves $(B)/radiosity-column $(B)/scenegen
+	  $(B)/radiosity-waves $(B)/radiosity-column $(B)/radiosity-master $(B)/radiosity-cluster $(B)/scenegen
 	@sh bench/run.sh
 
 # The paper's measurements with this machine's cores, written up as
 # bench/results/report.md (about 10 minutes; run it on an idle machine).
 report: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
-	  $(B)/radiosity-waves $(B)/radiosity-column $(B)/scenegen
+	  $(B)/radiosity-waves $(B)/radiosity-column $(B)/radiosity-master $(B)/radiosity-cluster $(B)/scenegen
 	@sh bench/report
 
 install: radiosity

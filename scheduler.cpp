@@ -16,11 +16,12 @@ namespace {
 // replace *edits (what workers must apply alike). Returns true when the
 // wave is over.
 bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wave,
-            std::vector<int32_t>* edits) {
+            std::vector<int32_t>* changed, std::vector<int32_t>* edits) {
   edits->clear();
   if (!subdivider->Due(shots_in_wave)) return false;
   const double t0 = ThreadCpuSeconds();
-  *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->Ambient(), shots_in_wave);
+  solver->TakeChanged(changed);
+  *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->Ambient(), shots_in_wave, *changed);
   for (int32_t e : *edits) Divide(mesh, e);
   solver->Divided(*edits);
   subdivider->CountTime(ThreadCpuSeconds() - t0);
@@ -82,7 +83,7 @@ class Scheduler {
             const std::function<void(const Sample&)>& sample,
             const std::function<void(const std::string&, bool)>& note)
       : mesh_(*mesh), mutable_mesh_(mesh), opts_(opts), solver_(solver), sub_(sub), t_(t),
-        first_(t), sample_(sample), note_(note), taken_(mesh->patches.size(), 0) {
+        first_(t), sample_(sample), note_(note) {
     if (const RunState* r = opts.resume) {
       wave_ = r->wave;
       wave_start_ = r->wave_start;
@@ -147,7 +148,6 @@ class Scheduler {
   std::unique_ptr<Transport> fallback_;
   const std::function<void(const Sample&)>& sample_;
   const std::function<void(const std::string&, bool)>& note_;
-  std::vector<char> taken_;           // owned by a worker, or its column waits
   std::vector<Slot> slots_;
   struct Ready {
     proto::Column column;
@@ -164,6 +164,7 @@ class Scheduler {
   int wave_ = 1;
   long wave_start_ = 0;               // shots before this wave
   std::vector<int32_t> edits_;
+  std::vector<int32_t> changed_;      // Refine's scratch
   std::deque<int> pending_;           // RunState::pending of a resumed run
   double last_checkpoint_ = 0;        // on t_'s clock
   RunResult r_;
@@ -175,9 +176,9 @@ int Scheduler::NextPatch() {
   while (!pending_.empty()) {
     const int p = pending_.front();
     pending_.pop_front();
-    if (p >= 0 && size_t(p) < taken_.size() && !taken_[p]) return p;
+    if (p >= 0 && size_t(p) < mesh_.patches.size() && !solver_->Taken(p)) return p;
   }
-  return solver_->Select(&taken_);
+  return solver_->Select();
 }
 
 RunState Scheduler::State() {
@@ -224,8 +225,8 @@ void Scheduler::Sizes(Slot* s, int workers) const {
 }
 
 void Scheduler::Release(Slot* s) {
-  for (const Slot::Sent& x : s->sent) taken_[x.a.patch] = 0;
-  for (int p : s->prepared) taken_[p] = 0;
+  for (const Slot::Sent& x : s->sent) solver_->Release(x.a.patch);
+  for (int p : s->prepared) solver_->Release(p);
   s->sent.clear();
   s->prepared.clear();
 }
@@ -293,7 +294,7 @@ void Scheduler::Distribute() {
       if (!s.alive || s.Queued() >= size_t(s.high)) continue;
       const int p = NextPatch();
       if (p < 0) break;  // nothing left with power to shoot: send what is prepared
-      taken_[p] = 1;
+      solver_->Take(p);  // owned by this worker until shot or lost
       s.prepared.push_back(p);
       more = true;
     }
@@ -362,7 +363,8 @@ void Scheduler::Subdivide() {
   for (const Slot& s : slots_)
     if (s.alive && Pipelined() && s.Queued() < size_t(s.low)) return;
   const double t0 = MonotonicSeconds();
-  const bool over = Refine(mutable_mesh_, solver_, sub_, solver_->shots() - wave_start_, &edits_);
+  const bool over =
+      Refine(mutable_mesh_, solver_, sub_, solver_->shots() - wave_start_, &changed_, &edits_);
   if (!edits_.empty()) t_->Divide(edits_);
   r_.subdivide_s += MonotonicSeconds() - t0;
   if (over) NextWave();
@@ -448,7 +450,7 @@ void Scheduler::ShootNext() {
   ready_.pop_front();
   if (from) --from->waiting;
   solver_->Shoot(c.patch, c.ff);
-  taken_[c.patch] = 0;
+  solver_->Release(c.patch);
   ++r_.columns;
   unshot_ = solver_->UnshotFraction();
   r_.shoot_s += MonotonicSeconds() - t0;

@@ -18,6 +18,9 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
   for (size_t p = 0; p < mesh.patches.size(); ++p) {
     const MeshFace& f = mesh.faces[mesh.patches[p].face];
     const double a = mesh.patches[p].area;
+    rho_.push_back(f.rho);
+    area_.push_back(a);
+    weight_ = glm::max(weight_, f.rho * a);
     total_area_ += a;
     emitted_ += (f.emission.r + f.emission.g + f.emission.b) * a;
     rho_area += f.rho * a;
@@ -43,6 +46,7 @@ void Solver::NewWave() {
   }
   times_shot_.assign(mesh_.patches.size(), 0);
   Resum();
+  Rebase();
 }
 
 // Per-element arrays for the elements Divide() has added; a divided
@@ -53,10 +57,13 @@ void Solver::Grow() {
   b_.resize(n);
   rho_per_area_.resize(n);
   patch_of_.resize(n);
-  for (size_t e = 0; e < n; ++e) {
+  is_changed_.resize(n, 0);
+  // Only added elements and their parents (divided since): O(divisions).
+  for (size_t e = from; e < n; ++e) {
     const Element& el = mesh_.elems[e];
-    if (e >= from) rho_per_area_[e] = mesh_.FaceOf(int(e)).rho / el.area;
+    rho_per_area_[e] = mesh_.FaceOf(int(e)).rho / el.area;
     patch_of_[e] = el.IsLeaf() ? el.patch : ~el.patch;
+    if (el.parent >= 0 && size_t(el.parent) < from) patch_of_[size_t(el.parent)] = ~el.patch;
   }
 }
 
@@ -79,18 +86,21 @@ glm::dvec3 Solver::Ambient() const {
 // it will not, so shooting it would only have to be taken back later.
 glm::dvec3 Solver::ToShoot(int p) const {
   if (!overshoot_ || !lit_[p]) return unshot_[p];
-  return unshot_[p] + mesh_.faces[mesh_.patches[p].face].rho * Ambient();
+  return unshot_[p] + rho_[p] * Ambient();
 }
 
-int Solver::Select(const std::vector<char>* taken) const {
+double Solver::Power(int p, const glm::dvec3& ambient) const {
+  const glm::dvec3 x = lit_[p] ? unshot_[p] + rho_[p] * ambient : unshot_[p];
+  return Abs(x) * area_[p];
+}
+
+int Solver::SelectByScan(const std::vector<char>* taken) const {
   const glm::dvec3 amb = overshoot_ ? Ambient() : glm::dvec3(0.0);
   int best = -1;
   double best_power = 0;
   for (size_t p = 0; p < unshot_.size(); ++p) {
     if ((taken && (*taken)[p]) || blind_[p]) continue;
-    const Patch& pa = mesh_.patches[p];
-    glm::dvec3 x = lit_[p] ? unshot_[p] + mesh_.faces[pa.face].rho * amb : unshot_[p];
-    double power = Abs(x) * pa.area;
+    const double power = Power(int(p), amb);
     if (power > best_power) {
       best_power = power;
       best = int(p);
@@ -99,60 +109,133 @@ int Solver::Select(const std::vector<char>* taken) const {
   return best;
 }
 
+// An upper bound of Power(p, a) for a = base_ (exact without
+// overshooting or light), plus 1e-9 of the magnitudes summed: far above
+// the rounding of either side (1e-16), so that the bound holds for the
+// computed powers too. For any other a, Power(p, a) moves from its value
+// at base_ by at most Σ_c area·ρ_c·|a_c − base_c| <= Σ_c weight_c·|Δa_c|,
+// the drift Select adds to every bound.
+double Solver::Bound(int p) const {
+  if (blind_[p]) return -HUGE_VAL;
+  if (!overshoot_ || !lit_[p]) return Abs(unshot_[p]) * area_[p];
+  const glm::dvec3 shared = rho_[p] * base_;
+  return (Abs(unshot_[p] + shared) + 1e-9 * (Abs(unshot_[p]) + Abs(shared))) * area_[p];
+}
+
+// The bounds again at the overshooting estimate as it is now: O(patches),
+// when the drift since the last made Select look at too many patches.
+void Solver::Rebase() {
+  base_ = overshoot_ ? Ambient() : glm::dvec3(0.0);
+  std::vector<double> bounds(unshot_.size());
+  for (size_t p = 0; p < bounds.size(); ++p) bounds[p] = Bound(int(p));
+  queue_.Build(bounds);
+}
+
+int Solver::Select() {
+  const glm::dvec3 amb = overshoot_ ? Ambient() : glm::dvec3(0.0);
+  const glm::dvec3 d = glm::abs(amb - base_);
+  double drift = (weight_.r * d.r + weight_.g * d.g + weight_.b * d.b) * (1 + 1e-9);
+  if (!std::isfinite(drift)) {  // a run about to stop as diverging: no bound holds
+    std::vector<char> taken(unshot_.size());
+    for (size_t p = 0; p < taken.size(); ++p) taken[p] = queue_.Taken(int(p));
+    return SelectByScan(&taken);
+  }
+  // Re-based once the patches visited since the last cost as much as
+  // doing it (with drift 0 only ties are visited: nothing to gain).
+  if (drift > 0 && queue_.Visited() > long(unshot_.size()) / 2 + 64) {
+    Rebase();
+    drift = 0;
+  }
+  return queue_.Best(drift, [&](int p) { return Power(p, amb); });
+}
+
 void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
-  const Patch& shooter = mesh_.patches[p];
   // A patch that sees no element sends its light out of the scene: its
   // unshot radiosity is spent, and it is never chosen again (nothing can
   // send it light either, by reciprocity).
   if (column.empty()) blind_[p] = 1;
   const glm::dvec3 x = column.empty() ? unshot_[p] : ToShoot(p);
-  abs_sum_ -= Abs(unshot_[p]) * shooter.area;
+  abs_sum_ -= Abs(unshot_[p]) * area_[p];
   unshot_[p] -= x;
-  abs_sum_ += Abs(unshot_[p]) * shooter.area;
-  unshot_sum_ -= x * shooter.area;
+  abs_sum_ += Abs(unshot_[p]) * area_[p];
+  unshot_sum_ -= x * area_[p];
   // Power arriving at element e and reflected: ρ_e · x · F · A_shooter.
   // Per element only B changes, by that over A_e; a patch's unshot
   // radiosity gains the same summed over its elements, and since they
   // share one ρ it is enough to sum F per patch here (the master's
   // per-shot cost bounds the speedup, paper graph 2).
-  const glm::dvec3 xa = x * shooter.area;
+  const glm::dvec3 xa = x * area_[p];
   // Ids increase along a column: the last is the largest.
   CHECK(column.empty() || size_t(column.back().elem) < patch_of_.size());
-  for (const FormFactor& ff : column) {
-    const int32_t e = ff.elem;
+  // At 10^5 elements and more the arrays are far larger than the caches
+  // and a column's elements are sparse in them: each element would wait
+  // for memory (~100 ns). Fetched kAhead elements early, it does not.
+  constexpr size_t kAhead = 16;
+  const FormFactor* col = column.data();
+  const size_t n = column.size();
+  for (size_t i = 0; i < n; ++i) {
+    if (i + kAhead < n) {
+      const int32_t a = col[i + kAhead].elem;
+      __builtin_prefetch(&b_[size_t(a)], 1);
+      __builtin_prefetch(&rho_per_area_[size_t(a)]);
+      __builtin_prefetch(&patch_of_[size_t(a)]);
+    }
+    const int32_t e = col[i].elem;
     int32_t q = patch_of_[e];
+    const double f = double(col[i].f);
     if (q >= 0) {
-      b_[e] += xa * (double(ff.f) * rho_per_area_[e]);
+      b_[e] += xa * (f * rho_per_area_[e]);
+      Changed(e);
     } else {  // divided since the column was computed: each leaf gains alike
       q = ~q;
       mesh_.LeavesUnder(e, &leaves_);
-      const glm::dvec3 gain = xa * (double(ff.f) * rho_per_area_[e]);
-      for (int l : leaves_) b_[l] += gain;
+      const glm::dvec3 gain = xa * (f * rho_per_area_[e]);
+      for (int l : leaves_) {
+        b_[l] += gain;
+        Changed(l);
+      }
     }
     if (fsum_[q] == 0) touched_.push_back(q);
-    fsum_[q] += double(ff.f);
+    fsum_[q] += f;
   }
-  for (int32_t q : touched_) {
-    const Patch& pq = mesh_.patches[q];
-    const glm::dvec3 reflected = mesh_.faces[pq.face].rho * xa * fsum_[q];
+  for (size_t i = 0; i < touched_.size(); ++i) {
+    if (i + kAhead < touched_.size()) {
+      const size_t a = size_t(touched_[i + kAhead]);
+      __builtin_prefetch(&unshot_[a], 1);
+      __builtin_prefetch(&rho_[a]);
+      __builtin_prefetch(&area_[a]);
+    }
+    const int32_t q = touched_[i];
+    const glm::dvec3 reflected = rho_[q] * xa * fsum_[q];
     fsum_[q] = 0;
     lit_[q] |= Abs(reflected) > 0;
     if (blind_[q]) continue;  // a hemicube speck: it could not pass it on
-    abs_sum_ -= Abs(unshot_[q]) * pq.area;
-    unshot_[q] += reflected / pq.area;
-    abs_sum_ += Abs(unshot_[q]) * pq.area;
+    abs_sum_ -= Abs(unshot_[q]) * area_[q];
+    unshot_[q] += reflected / area_[q];
+    abs_sum_ += Abs(unshot_[q]) * area_[q];
     unshot_sum_ += reflected;
+    queue_.Set(q, Bound(q));
   }
+  queue_.Set(p, Bound(p));
   touched_.clear();
   ++times_shot_[p];
   // The running sums drift by rounding; a full sum every sweep bounds it.
   if (++shots_ % long(unshot_.size()) == 0) Resum();
 }
 
+void Solver::TakeChanged(std::vector<int32_t>* out) {
+  out->swap(changed_);
+  changed_.clear();
+  for (int32_t e : *out) is_changed_[size_t(e)] = 0;
+}
+
 void Solver::Divided(const std::vector<int32_t>& elems) {
   Grow();
   for (int32_t p : elems)
-    for (int k = 0; k < kChildren; ++k) b_[mesh_.elems[p].first_child + k] = b_[p];
+    for (int k = 0; k < kChildren; ++k) {
+      b_[mesh_.elems[p].first_child + k] = b_[p];
+      Changed(mesh_.elems[p].first_child + k);
+    }
   // Fitted to the values as they are now (elements divided in this pass
   // hold their parent's), so the order of `elems` does not matter.
   std::vector<glm::dvec3> shaped(kChildren * elems.size());
@@ -256,6 +339,7 @@ bool Solver::Restore(const SolverState& s, std::string* err) {
   unshot_sum_ = s.unshot_sum;
   abs_sum_ = s.abs_sum;
   shots_ = s.shots;
+  Rebase();
   return true;
 }
 

@@ -17,6 +17,7 @@
 
 #include "hemicube.h"
 #include "mesh.h"
+#include "shooters.h"
 
 // Everything a Solver holds that is not derived from the mesh: what a
 // checkpoint keeps (checkpoint.h) to go on later exactly where it stood.
@@ -36,9 +37,20 @@ class Solver {
   Solver(const Mesh& mesh, bool overshoot);
 
   // The patch with the largest power still to shoot (|unshot + overshoot
-  // estimate| × area, channels summed) among those not marked in `taken`
-  // (may be null), or -1 when there is nothing left to shoot.
-  int Select(const std::vector<char>* taken = nullptr) const;
+  // estimate| × area, channels summed; ties to the lowest id) among those
+  // not taken, or -1 when there is nothing left to shoot. Exactly the
+  // choice of SelectByScan, found in a ShooterQueue (shooters.h): the
+  // overshooting estimate, shared by all patches, is bounded by how far it
+  // moved since the queue's bounds were set (Bound, Select).
+  int Select();
+  // Take(p): p is handed to a worker and not selected until Release(p)
+  // (after its shot, or when its worker is lost).
+  void Take(int p) { queue_.Take(p); }
+  void Release(int p) { queue_.Release(p); }
+  bool Taken(int p) const { return queue_.Taken(p); }
+  // Select() by looking at every patch not marked in `taken` (may be
+  // null): the reference the queue is tested against.
+  int SelectByScan(const std::vector<char>* taken = nullptr) const;
 
   // Shoots patch p along its column. The overshooting estimate is taken
   // here, from the ambient term as it is now (paper §4.2), not when p was
@@ -46,6 +58,11 @@ class Solver {
   // before it heard of them): what an element since divided receives goes
   // to every leaf under it alike.
   void Shoot(int p, const std::vector<FormFactor>& column);
+
+  // The elements whose radiosity changed since the last call (each once;
+  // those Divided() made included), into *out: what a division pass needs
+  // to look at again (Subdivider::Pass).
+  void TakeChanged(std::vector<int32_t>* out);
 
   // Divide() was applied to the mesh for these elements (in this order):
   // their children get the parent's radiosity shaped by its gradient
@@ -75,6 +92,15 @@ class Solver {
 
  private:
   glm::dvec3 ToShoot(int p) const;
+  double Power(int p, const glm::dvec3& ambient) const;
+  double Bound(int p) const;
+  void Rebase();
+  void Changed(int32_t e) {
+    if (!is_changed_[size_t(e)]) {
+      is_changed_[size_t(e)] = 1;
+      changed_.push_back(e);
+    }
+  }
   void Resum();
   void Grow();
 
@@ -84,14 +110,21 @@ class Solver {
   std::vector<glm::dvec3> b_;       // per element
   std::vector<glm::dvec3> rho_per_area_;  // per element: ρ / A, for Shoot
   std::vector<int32_t> patch_of_;   // per element, compact for Shoot
+  std::vector<glm::dvec3> rho_;     // per patch: its face's, compact for Shoot
+  std::vector<double> area_;        // per patch, likewise
   std::vector<glm::dvec3> unshot_;  // per patch
   std::vector<double> fsum_;        // per patch: Σ F within one Shoot
   std::vector<int32_t> touched_;    // patches with fsum_ != 0
+  std::vector<uint8_t> is_changed_; // per element: in changed_
+  std::vector<int32_t> changed_;    // elements whose B changed, for TakeChanged
   std::vector<uint8_t> lit_;        // per patch: emits, or light reached it
   std::vector<uint8_t> blind_;      // per patch: its column was empty
   std::vector<int> times_shot_;
   glm::dvec3 unshot_sum_{0.0};      // Σ unshot·area, kept incrementally
   double abs_sum_ = 0;              // Σ |unshot|·area (channels summed), too
+  ShooterQueue queue_;              // per patch: Bound(p), taken
+  glm::dvec3 base_{0.0};            // the overshooting estimate the bounds assume
+  glm::dvec3 weight_{0.0};          // max over patches of area·ρ, per channel
   glm::dvec3 reflect_{1.0};         // 1/(1−ρ̄): ambient interreflection factor
   double total_area_ = 0, emitted_ = 0;
   long shots_ = 0;

@@ -38,54 +38,140 @@ bool Subdivider::Due(long shots) const {
   return !finished_ && shots >= first_ && (last_pass_ < 0 || shots - last_pass_ >= opts_.between);
 }
 
+// The per-element caches for elements added since (the children of
+// divided elements; all of them after Restore or at a new wave), and the
+// divided parents out of them.
+void Subdivider::Track(const Mesh& mesh) {
+  const size_t from = eligible_.size(), n = mesh.elems.size();
+  eligible_.resize(n);
+  mean_area_.resize(n);
+  factor_.resize(n, 0);
+  at_pass_.resize(n, -1);
+  mark_.resize(n, 0);
+  for (size_t e = from; e < n; ++e) {
+    const Element& el = mesh.elems[e];
+    const glm::dvec3& ke = mesh.FaceOf(int(e)).emission;
+    eligible_[e] = el.IsLeaf() && el.level < opts_.max_level &&
+                   LongestEdge(mesh, el) / 2 >= opts_.min_size;
+    mean_area_[e] = el.IsLeaf() && !(ke.r + ke.g + ke.b > 0) ? el.area : -1;
+    if (el.parent >= 0 && size_t(el.parent) < from) {
+      eligible_[size_t(el.parent)] = 0;
+      mean_area_[size_t(el.parent)] = -1;
+    }
+  }
+}
+
+// How much a factor computed at pass k of this wave may have grown with
+// the radiosity as it was: each of its terms is c / (s + U) with s >= 0
+// (else the factor was not bounded) and U = Lum(Kd·ambient) + 0.2·mean,
+// so c / (s + U') <= c / (s + U) · max(1, U / U'), and U / U' is at most
+// the largest ratio of the parts of U (all >= 0): per channel the ambient
+// (Kd cancels), and the mean. +inf when a part is negative or one that
+// was there is gone.
+double Subdivider::PassBound(int k, const glm::dvec3& ambient, double mean) const {
+  double r = 1;
+  auto part = [&r](double was, double now) {
+    if (was < 0 || now < 0) r = HUGE_VAL;
+    else if (was > 0) r = std::max(r, now > 0 ? was / now : HUGE_VAL);
+  };
+  for (int c = 0; c < 3; ++c) part(pass_ambient_[size_t(k)][c], ambient[c]);
+  part(pass_mean_[size_t(k)], mean);
+  return r;
+}
+
+// The dividing factor of leaf e (subdivide.h). *bounded: false when a
+// term had s < 0 or no positive scale, where PassBound does not hold.
+double Subdivider::Factor(const Mesh& mesh, const std::vector<glm::dvec3>& b,
+                          const glm::dvec3& ambient, double mean, int e, bool* bounded) {
+  std::vector<int>& nb = nb_;
+  const Element& el = mesh.elems[size_t(e)];
+  LeafNeighbours(mesh, e, &nb);
+  const double unsure = Lum(mesh.FaceOf(e).rho * ambient) + 0.2 * mean;
+  const glm::dvec3 c = mesh.Centroid(e);
+  const double size = std::sqrt(el.area), be = Lum(b[size_t(e)]);
+  double factor = 0;
+  *bounded = true;
+  for (int m : nb) {
+    const double dist = glm::length(mesh.Centroid(m) - c);
+    const double bm = Lum(b[size_t(m)]);
+    const double scale = std::max(be, bm) + unsure;
+    if (!(dist > 0)) continue;
+    if (!(scale > 0) || !(std::max(be, bm) >= 0)) *bounded = false;
+    if (!(scale > 0)) continue;
+    const double finer = 1 + 0.5 * std::max(0, mesh.elems[size_t(m)].level - el.level);
+    factor = std::max(factor, std::abs(be - bm) / dist * size / scale * finer);
+  }
+  return factor;
+}
+
 std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
-                                      const glm::dvec3& ambient, long shots) {
+                                      const glm::dvec3& ambient, long shots,
+                                      const std::vector<int32_t>& changed) {
   last_pass_ = shots;
   ++passes_;
   const size_t n = mesh.elems.size();
   CHECK(b.size() == n);
+  Track(mesh);
   double sum = 0, area = 0;  // the lit scene's mean: the absolute part of the scale
   for (size_t e = 0; e < n; ++e) {
-    const Element& el = mesh.elems[e];
-    const glm::dvec3& ke = mesh.FaceOf(int(e)).emission;
-    if (!el.IsLeaf() || ke.r + ke.g + ke.b > 0) continue;
-    sum += Lum(b[e]) * el.area;
-    area += el.area;
+    if (mean_area_[e] < 0) continue;
+    sum += Lum(b[e]) * mean_area_[e];
+    area += mean_area_[e];
   }
   const double mean = area > 0 ? sum / area : 0;
 
-  std::vector<char> chosen(n, 0);
-  std::vector<int32_t> out;
+  // The leaves to evaluate, marked: every one at a wave's first pass (or
+  // without `incremental`); else those changed, their neighbours, the new,
+  // and those whose bound reaches the threshold. Evaluated in id order.
+  std::vector<int32_t> todo;
   std::vector<int> nb;
-  for (size_t e = 0; e < n; ++e) {
-    const Element& el = mesh.elems[e];
-    if (!el.IsLeaf() || el.level >= opts_.max_level) continue;
-    if (LongestEdge(mesh, el) / 2 < opts_.min_size) continue;
-    LeafNeighbours(mesh, int(e), &nb);
-    const double unsure = Lum(mesh.FaceOf(int(e)).rho * ambient) + 0.2 * mean;
-    const glm::dvec3 c = mesh.Centroid(int(e));
-    const double size = std::sqrt(el.area), be = Lum(b[e]);
-    double factor = 0;
-    for (int m : nb) {
-      const double dist = glm::length(mesh.Centroid(m) - c);
-      const double bm = Lum(b[m]);
-      const double scale = std::max(be, bm) + unsure;
-      if (!(dist > 0) || !(scale > 0)) continue;
-      const double finer = 1 + 0.5 * std::max(0, mesh.elems[m].level - el.level);
-      factor = std::max(factor, std::abs(be - bm) / dist * size / scale * finer);
+  const int pass = int(pass_mean_.size());
+  auto want = [&](int32_t e) {
+    if (eligible_[size_t(e)] && !mark_[size_t(e)]) {
+      mark_[size_t(e)] = 1;
+      todo.push_back(e);
     }
-    if (factor > threshold_) {
-      chosen[e] = 1;
-      out.push_back(int32_t(e));
+  };
+  // Changed leaves and their neighbours take two neighbour searches each:
+  // when a quarter of the leaves changed, evaluating all is cheaper.
+  if (!opts_.incremental || pass == 0 || 4 * long(changed.size()) > mesh.LeafCount()) {
+    for (size_t e = 0; e < n; ++e) want(int32_t(e));
+  } else {
+    for (int32_t e : changed) {
+      if (size_t(e) >= n || !mesh.elems[size_t(e)].IsLeaf()) continue;  // divided since
+      want(e);
+      LeafNeighbours(mesh, e, &nb);
+      for (int m : nb) want(m);
     }
+    std::vector<double> grow(static_cast<size_t>(pass));
+    for (int k = 0; k < pass; ++k) grow[size_t(k)] = PassBound(k, ambient, mean) * (1 + 1e-9);
+    for (size_t e = 0; e < n; ++e) {
+      if (!eligible_[e] || mark_[e]) continue;
+      const int k = at_pass_[e];
+      if (k < 0 || !(factor_[e] * grow[size_t(k)] <= threshold_)) want(int32_t(e));
+    }
+    std::sort(todo.begin(), todo.end());
+  }
+  pass_ambient_.push_back(ambient);
+  pass_mean_.push_back(mean);
+  evaluated_ = long(todo.size());
+
+  std::vector<int32_t> out;
+  for (int32_t e : todo) {
+    bool bounded;
+    const double factor = Factor(mesh, b, ambient, mean, e, &bounded);
+    factor_[size_t(e)] = bounded ? factor : HUGE_VAL;
+    at_pass_[size_t(e)] = pass;
+    if (factor > threshold_) out.push_back(e);
+    else mark_[size_t(e)] = 0;  // marks left: the chosen, for grading
   }
   // Graded: a coarser neighbour of a leaf being divided is divided too, or
   // levels two apart would meet (a T-vertex on a T-vertex).
   for (size_t i = 0; i < out.size(); ++i) {
     LeafNeighbours(mesh, out[i], &nb);
     for (int m : nb)
-      if (!chosen[m] && mesh.elems[m].level < mesh.elems[out[i]].level) {
-        chosen[m] = 1;
+      if (!mark_[size_t(m)] && mesh.elems[m].level < mesh.elems[out[i]].level) {
+        mark_[size_t(m)] = 1;
         out.push_back(m);
       }
   }
@@ -93,6 +179,7 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::d
     const int la = mesh.elems[a].level, lc = mesh.elems[c].level;
     return la != lc ? la < lc : a < c;
   });
+  for (int32_t e : out) mark_[size_t(e)] = 0;
   // A pass that finds only a few (the radiosity still settling, hemicube
   // noise) is quiet: at the floor, subdivision is finished, and the few are
   // not worth a wave of their own.
@@ -118,6 +205,9 @@ bool Subdivider::WaveOver(bool converged) const {
 }
 
 void Subdivider::StartWave(const Mesh& mesh) {
+  // The radiosity starts again: the wave's first pass evaluates every leaf.
+  pass_ambient_.clear();
+  pass_mean_.clear();
   wave_start_leaves_ = mesh.LeafCount();
   divided_in_wave_ = 0;
   last_pass_ = -1;
@@ -138,6 +228,10 @@ SubdividerState Subdivider::State() const {
 }
 
 void Subdivider::Restore(const SubdividerState& s) {
+  // The mesh was divided since: every cache again, every leaf evaluated.
+  eligible_.clear();
+  pass_ambient_.clear();
+  pass_mean_.clear();
   threshold_ = s.threshold;
   last_pass_ = s.last_pass;
   wave_start_leaves_ = s.wave_start_leaves;

@@ -41,6 +41,10 @@ struct SubdivideOptions {
   // Elements (mesh.elems, divided ones included) a pass may not go past:
   // a pass that would is dropped and subdivision ends (capped()).
   long max_elements = kMaxElements;
+  // Evaluate only the leaves whose factor may have passed the threshold
+  // (Pass); false: every leaf, every pass (the reference the tests hold
+  // the incremental passes to).
+  bool incremental = true;
 };
 
 // A Subdivider's state between passes (checkpoint.h).
@@ -65,9 +69,25 @@ class Subdivider {
   // One pass: the leaves whose dividing factor exceeds the threshold, and
   // the coarser neighbours they force (neighbouring levels stay within
   // one), coarser first. b: radiosity per element; ambient: the solver's
-  // overshooting estimate (before Kd). Lowers the threshold.
+  // overshooting estimate (before Kd); changed: the elements whose b
+  // changed since the last pass (Solver::TakeChanged). Lowers the
+  // threshold.
+  //
+  // The divisions are those of evaluating every leaf, but a pass evaluates
+  // (neighbour search, factor) only the leaves that changed, their
+  // neighbours, new leaves, and those whose last factor could have grown
+  // past the threshold since: with the same radiosity, a factor changes
+  // only through the scale's shared part Kd·ambient + 0.2·mean, and by at
+  // most the ratio of the old shared terms to the new (PassBound). A scan
+  // of two numbers per leaf finds those; the mean of the lit scene is
+  // still summed over every leaf (8 bytes each, in order: the same sum).
+  // A changed leaf costs two neighbour searches (itself, its neighbours):
+  // when over a quarter changed, the pass evaluates every leaf instead.
   std::vector<int32_t> Pass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
-                            const glm::dvec3& ambient, long shots);
+                            const glm::dvec3& ambient, long shots,
+                            const std::vector<int32_t>& changed);
+  // Leaves whose factor the last pass computed.
+  long evaluated() const { return evaluated_; }
 
   // True when the current wave should end, once it divided anything:
   // wave_fraction of its starting elements divided, or a pass found little
@@ -94,7 +114,25 @@ class Subdivider {
   void Restore(const SubdividerState& s);
 
  private:
+  double Factor(const Mesh& mesh, const std::vector<glm::dvec3>& b, const glm::dvec3& ambient,
+                double mean, int e, bool* bounded);
+  void Track(const Mesh& mesh);
+  double PassBound(int pass, const glm::dvec3& ambient, double mean) const;
+
   SubdivideOptions opts_;
+  // Per element, grown as the mesh is: may it be divided (a leaf above
+  // max_level, long enough); its area if the lit mean counts it, else -1;
+  // the factor as last computed and the pass of this wave that did (-1:
+  // none; factor +inf: to be computed every pass, no bound holds).
+  std::vector<uint8_t> eligible_;
+  std::vector<double> mean_area_;
+  std::vector<double> factor_;
+  std::vector<int32_t> at_pass_;
+  std::vector<uint8_t> mark_;            // Pass's scratch, all 0 between passes
+  std::vector<int> nb_;                  // Factor's scratch
+  std::vector<glm::dvec3> pass_ambient_;  // per pass of this wave: its shared terms
+  std::vector<double> pass_mean_;
+  long evaluated_ = 0;
   double threshold_;
   long first_ = 0;
   long last_pass_ = -1;       // shot of the last pass in this wave

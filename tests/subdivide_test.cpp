@@ -374,4 +374,41 @@ TEST(Subdivider, StopsAtTheElementCap) {
   EXPECT_EQ(m.elems.size(), built);
 }
 
+// Incremental passes divide exactly what evaluating every leaf divides:
+// the same mesh, bit for bit the same radiosity, through the waves of a
+// sharp shadow with overshooting on and off, evaluating fewer leaves.
+TEST(Subdivider, IncrementalPassesDivideAsEvaluatingEveryLeaf) {
+  const Scene scene = ShadowScene();
+  MeshOptions mo;
+  mo.patch_size = 0.25;
+  for (bool over : {true, false}) {
+    Mesh m[2];
+    long passes[2] = {0, 0}, evaluated[2] = {0, 0};
+    std::vector<glm::dvec3> b[2];
+    for (int i = 0; i < 2; ++i) {
+      m[i] = MakeMesh(scene, mo);
+      SubdivideOptions so;
+      so.incremental = i == 0;
+      Subdivider sub(&m[i], so);
+      Solver solver(m[i], over);
+      RunOptions o;
+      o.resolution = 64;
+      o.overshoot = over;
+      o.epsilon = 1e-3;
+      o.log_every = 1;
+      RunSequential(&m[i], o, &solver, &sub, [&](const Sample&) {
+        if (sub.passes() > passes[i]) evaluated[i] += sub.evaluated();
+        passes[i] = sub.passes();
+      });
+      passes[i] = sub.passes();
+      b[i] = solver.radiosity();
+    }
+    EXPECT_GT(passes[0], 5);
+    EXPECT_EQ(passes[0], passes[1]);
+    EXPECT_LT(evaluated[0], evaluated[1]);
+    EXPECT_EQ(MeshHash(m[0]), MeshHash(m[1]));
+    EXPECT_TRUE(b[0] == b[1]) << "overshoot " << over;
+  }
+}
+
 }  // namespace

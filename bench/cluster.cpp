@@ -1,0 +1,71 @@
+// radiosity-cluster: the cluster simulation (sim.h) on any scene, as table
+// rows on stdout (bench/master.sh adds the headers).
+//   radiosity-cluster SCENE.obj SHOTS [R] [WORKERS...]
+// The real scheduler and solver drive simulated workers (every column
+// computed for real, the master charged its own measured CPU time) on a
+// shared link of 1 and 10 Gbit/s with 100 us latency, from 1 worker up
+// (default 8 32 64 128). Per run: simulated seconds for SHOTS shots, the
+// speedup over one simulated worker on the same link, the efficiency, the
+// master's charged time per shot, and the most speedup the master's time
+// allows (paper graph 2: a worker's time per column / the master's per
+// shot). Without subdivision, so that every run shoots the same mesh.
+// Built against the program of before issue 14 as well (bench/master.sh):
+// it uses only RunMaster, Solver and SimTransport.
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "mesh.h"
+#include "scene.h"
+#include "scheduler.h"
+#include "sim.h"
+#include "solver.h"
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: radiosity-cluster SCENE.obj SHOTS [R] [WORKERS...]\n");
+    return 2;
+  }
+  const long shots = std::atol(argv[2]);
+  const int res = argc > 3 ? std::atoi(argv[3]) : 256;
+  std::vector<int> counts;
+  for (int i = 4; i < argc; ++i) counts.push_back(std::atoi(argv[i]));
+  if (counts.empty()) counts = {8, 32, 64, 128};
+  Scene scene;
+  Mesh mesh;
+  std::string err;
+  std::vector<std::string> warnings;
+  if (!LoadScene(argv[1], &scene, &err, &warnings) || !BuildMesh(scene, MeshOptions(), &mesh, &err)) {
+    std::fprintf(stderr, "radiosity-cluster: %s\n", err.c_str());
+    return 1;
+  }
+  std::string name = argv[1];
+  name = name.substr(name.find_last_of('/') + 1);
+  for (double bps : {1e9, 1e10}) {
+    double one = 0;
+    std::vector<int> runs = {1};
+    runs.insert(runs.end(), counts.begin(), counts.end());
+    for (int w : runs) {
+      SimOptions so;
+      so.workers = w;
+      so.bandwidth_bps = bps;
+      so.resolution = res;
+      SimTransport t(mesh, so);
+      Solver solver(mesh, true);
+      RunOptions o;
+      o.resolution = res;
+      o.epsilon = 1e-12;
+      o.max_shots = shots;
+      const RunResult r = RunMaster(&mesh, o, &solver, nullptr, &t, nullptr, nullptr);
+      const double per_shot = t.MasterSeconds() / double(r.shots);
+      const double column = r.worker_s / double(r.columns);
+      if (w == 1) one = r.seconds;
+      std::printf("| %s | %ld | %ld | %.0f Gbit/s | %d | %.3f | %.1f | %.2f | %.1f | %.0f |\n",
+                  name.c_str(), long(mesh.elems.size()), r.shots, bps / 1e9, w, r.seconds,
+                  one / r.seconds, one / r.seconds / w, 1e6 * per_shot, column / per_shot);
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}

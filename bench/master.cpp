@@ -1,0 +1,161 @@
+// radiosity-master: the master's own work per shot on one scene, as one
+// table row on stdout (bench/master.sh adds the headers).
+//   radiosity-master SCENE.obj SHOTS [R] [--no-overshoot] [--divide [--every-leaf]]
+// Each shot as the master does it with workers: select the next patch,
+// decode the column that comes back (the frame a worker sends, made here
+// by ShotColumn and EncodeColumn, which are not timed: a worker's work),
+// shoot it. Timed on the monotonic clock per part and compared with issue
+// 14's target, 10 us + 5 ns per covered element (form factors in the
+// column). --divide: a division pass every 10 shots after the first 20
+// (without waves), timed per pass, with the share of the leaves it
+// evaluated; --every-leaf: every leaf every pass, as before issue 14.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "clock.h"
+#include "hemicube.h"
+#include "mesh.h"
+#include "protocol.h"
+#include "scene.h"
+#include "solver.h"
+#include "subdivide.h"
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: radiosity-master SCENE.obj SHOTS [R] [--no-overshoot] [--divide]\n");
+    return 2;
+  }
+  const long shots = std::atol(argv[2]);
+  int res = 256;
+  bool overshoot = true, divide = false, every_leaf = false;
+  for (int i = 3; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--no-overshoot")) overshoot = false;
+    else if (!std::strcmp(argv[i], "--divide")) divide = true;
+    else if (!std::strcmp(argv[i], "--every-leaf")) every_leaf = true;
+    else res = std::atoi(argv[i]);
+  }
+  Scene scene;
+  Mesh mesh;
+  std::string err;
+  std::vector<std::string> warnings;
+  if (!LoadScene(argv[1], &scene, &err, &warnings) || !BuildMesh(scene, MeshOptions(), &mesh, &err)) {
+    std::fprintf(stderr, "radiosity-master: %s\n", err.c_str());
+    return 1;
+  }
+  const long patches = long(mesh.patches.size()), built = long(mesh.elems.size());
+  // First the columns, in the order the run shoots them (a worker's work,
+  // not timed); then the master's work alone on them, three times on
+  // fresh solvers (the same choices: deterministic), the quickest kept,
+  // with the caches its own as a master's are beside its workers.
+  std::vector<std::string> frames;
+  {
+    Solver solver(mesh, overshoot);
+    Hemicube h(res);
+    proto::Column col;
+    for (long i = 0; i < shots; ++i) {
+      const int p = solver.Select();
+      if (p < 0) break;
+      col.patch = p;
+      col.k = solver.TimesShot(p);
+      ShotColumn(&h, mesh, p, col.k, true, 1, &col.ff);
+      frames.emplace_back();
+      proto::EncodeColumn(col, &frames.back());
+      // What the master shoots is what it decodes (16-bit codes).
+      proto::Column got;
+      if (!proto::DecodeColumn(frames.back().data() + proto::kHeaderSize,
+                               frames.back().size() - proto::kHeaderSize, &got, &err)) {
+        std::fprintf(stderr, "radiosity-master: %s\n", err.c_str());
+        return 1;
+      }
+      solver.Shoot(p, got.ff);
+    }
+  }
+  double select_s = HUGE_VAL / 4, decode_s = 0, shoot_s = 0, pass_s = 0, pass_max = 0, policy_s = 0;
+  long covered = 0, done = 0, passes = 0, divided = 0, evaluated = 0, leaves = 0;
+  std::vector<int32_t> changed;
+  for (int round = 0; round < (divide ? 1 : 3); ++round) {
+    Solver solver(mesh, overshoot);
+    SubdivideOptions so;
+    so.waves = false;
+    so.incremental = !every_leaf;
+    Subdivider sub(&mesh, so);
+    proto::Column got;
+    proto::FrameReader reader;
+    std::string payload;
+    double sel = 0, dec = 0, sho = 0;
+    covered = 0;
+    const double cpu0 = ThreadCpuSeconds(), wall0 = MonotonicSeconds();
+    for (done = 0; done < long(frames.size()); ++done) {
+      double t0 = MonotonicSeconds();
+      const int p = solver.Select();
+      solver.Take(p);
+      const double t1 = MonotonicSeconds();
+      reader.Append(frames[size_t(done)].data(), frames[size_t(done)].size());
+      proto::Msg type;
+      if (reader.Next(&type, &payload, &err) != proto::FrameReader::kFrame ||
+          !proto::DecodeColumn(payload, &got, &err) || got.patch != p) {
+        std::fprintf(stderr, "radiosity-master: %s (patch %d, recorded %d)\n", err.c_str(), p,
+                     got.patch);
+        return 1;
+      }
+      const double t2 = MonotonicSeconds();
+      solver.Shoot(p, got.ff);
+      solver.Release(p);
+      const double t3 = MonotonicSeconds();
+      sel += t1 - t0;
+      dec += t2 - t1;
+      sho += t3 - t2;
+      covered += long(got.ff.size());
+      // The recorded columns predate the divisions, as columns from
+      // workers may: Shoot gives a divided element's share to its leaves.
+      if (divide && sub.Due(done + 1)) {
+        t0 = ThreadCpuSeconds();  // a pass takes milliseconds: the CPU clock's cost is nothing
+        solver.TakeChanged(&changed);
+        const std::vector<int32_t> edits =
+            sub.Pass(mesh, solver.radiosity(), solver.Ambient(), done + 1, changed);
+        evaluated += sub.evaluated();
+        leaves += mesh.LeafCount();
+        policy_s += ThreadCpuSeconds() - t0;
+        for (int32_t e : edits) Divide(&mesh, e);
+        solver.Divided(edits);
+        const double t = ThreadCpuSeconds() - t0;
+        pass_s += t;
+        pass_max = std::max(pass_max, t);
+        ++passes;
+        divided += long(edits.size());
+      }
+    }
+    // On a shared machine the wall clock runs on while the thread waits
+    // for a core: the parts' shares of the round's wall time, scaled to
+    // its CPU time (the thread's clock is too dear to read per part).
+    const double scale = (ThreadCpuSeconds() - cpu0) / (MonotonicSeconds() - wall0);
+    sel *= scale;
+    dec *= scale;
+    sho *= scale;
+    if (sel + dec + sho < select_s + decode_s + shoot_s) {
+      select_s = sel;
+      decode_s = dec;
+      shoot_s = sho;
+    }
+  }
+  const double n = double(std::max(1L, done)), per = double(covered) / n;
+  const double total = 1e6 * (select_s + decode_s + shoot_s) / n;
+  std::string name = argv[1];
+  name = name.substr(name.find_last_of('/') + 1);
+  std::printf("| %s | %s | %ld | %ld | %ld | %.0f | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f |",
+              name.c_str(), overshoot ? "on" : "off", patches, built, done, per,
+              1e6 * select_s / n, 1e6 * decode_s / n, 1e6 * shoot_s / n, total,
+              10 + 0.005 * per, 1e3 * (total - 10) / std::max(1.0, per));
+  if (divide)
+    std::printf(" %ld | %ld | %.3f | %.2f | %.2f | %.2f |", passes, divided,
+                double(evaluated) / double(std::max(1L, leaves)),
+                1e3 * policy_s / double(std::max(1L, passes)),
+                1e3 * pass_s / double(std::max(1L, passes)), 1e3 * pass_max);
+  std::printf("\n");
+  return 0;
+}
