@@ -80,6 +80,7 @@ MasterRun::~MasterRun() = default;
 void MasterRun::Build() {
   std::string err;
   std::vector<std::string> warnings;
+  const double t0 = MonotonicSeconds();
   const bool loaded = LoadScene(opts_.scene_path, &scene_, &err, &warnings);
   for (const std::string& w : warnings) std::fprintf(stderr, "radiosity: warning: %s\n", w.c_str());
   if (!loaded) Die(kExitUsage, err);
@@ -91,10 +92,15 @@ void MasterRun::Build() {
   if (!opts_.reference.empty() && !ReadReference(opts_.reference, scene_, &ref_, &err))
     Die(kExitUsage, err);
 
+  const double t1 = MonotonicSeconds();
   if (!BuildMesh(scene_, opts_.mesh, &mesh_, &err)) Die(kExitUsage, opts_.scene_path + ": " + err);
+  const double t2 = MonotonicSeconds();
   if (opts_.verbosity >= 2)
-    std::fprintf(stderr, "radiosity: %zu faces, %zu patches, %zu elements (patch size %g)\n",
-                 scene_.faces.size(), mesh_.patches.size(), mesh_.elems.size(), mesh_.patch_size);
+    std::fprintf(stderr,
+                 "radiosity: %zu faces, %zu patches, %zu elements (patch size %g); "
+                 "loaded in %.2f s, meshed in %.2f s\n",
+                 scene_.faces.size(), mesh_.patches.size(), mesh_.elems.size(), mesh_.patch_size,
+                 t1 - t0, t2 - t1);
 
   // A checkpoint to resume is checked before anything is started; one to
   // write must be writable before the run starts.
