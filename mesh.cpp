@@ -373,15 +373,20 @@ void BorderPut(std::vector<int32_t>* table, const Mesh& m, int32_t s) {
   (*table)[i] = s;
 }
 
-// Linear probing at most 3/4 full: 4 bytes a slot, so 5 to 11 bytes per
-// border edge.
+// Makes room for `more` entries: linear probing at most 3/4 full, 4 bytes
+// a slot, so 5 to 11 bytes per border edge.
+void BorderReserve(Mesh* m, size_t more) {
+  size_t size = std::max<size_t>(64, m->border.size());
+  while (4 * (m->border_count + more) > 3 * size) size *= 2;
+  if (size == m->border.size()) return;
+  std::vector<int32_t> grown(size, -1);
+  for (int32_t x : m->border)
+    if (x >= 0) BorderPut(&grown, *m, x);
+  m->border.swap(grown);
+}
+
 void BorderAdd(Mesh* m, int32_t s) {
-  if (4 * (m->border_count + 1) > 3 * m->border.size()) {
-    std::vector<int32_t> grown(std::max<size_t>(64, 2 * m->border.size()), -1);
-    for (int32_t x : m->border)
-      if (x >= 0) BorderPut(&grown, *m, x);
-    m->border.swap(grown);
-  }
+  BorderReserve(m, 1);
   BorderPut(&m->border, *m, s);
   ++m->border_count;
 }
@@ -517,8 +522,21 @@ void ConnectEdges(Mesh* mesh) {
   mesh->split_base = int32_t(mesh->verts.size());
   for (size_t e = 0; e < mesh->elems.size(); ++e)
     if (mesh->elems[e].IsLeaf()) Link(mesh, int(e));
-  for (size_t e = 0; e < mesh->elems.size(); ++e)
-    if (mesh->elems[e].IsLeaf()) Border(mesh, int(e), true);
+  // The border edges first, then a table of the right size: growing it
+  // edge by edge would rehash (from the geometry, out of cache) ever again.
+  std::vector<int32_t> border;
+  mesh->border_bits.assign(mesh->elems.size(), 0);
+  for (size_t e = 0; e < mesh->elems.size(); ++e) {
+    const Element& el = mesh->elems[e];
+    for (int k = 0, n = Corners(el); k < n && el.IsLeaf(); ++k)
+      if (Owner(*mesh, el.v[(k + 1) % n], el.v[k]) < 0) {
+        mesh->border_bits[e] |= uint8_t(1 << k);
+        border.push_back(Slot(int(e), k));
+      }
+  }
+  BorderReserve(mesh, border.size());
+  for (int32_t s : border) BorderPut(&mesh->border, *mesh, s);
+  mesh->border_count = border.size();
 }
 
 void Divide(Mesh* mesh, int32_t elem) {

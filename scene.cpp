@@ -531,3 +531,7 @@ glm::dvec3 AreaVector(const std::vector<glm::dvec3>& poly) {
     n += glm::cross(poly[i] - centroid, poly[(i + 1) % poly.size()] - centroid);
   return 0.5 * n;
 }
+
+void DropVertices(Scene* scene) {
+  for (Face& f : scene->faces) std::vector<glm::dvec3>().swap(f.verts);
+}

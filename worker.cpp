@@ -207,6 +207,10 @@ int Worker::Run(std::string* err) {
   if (type != proto::Msg::kScene || !proto::DecodeScene(payload, &setup, &why))
     return Fail("expected a scene: " + why, err);
   if (!BuildMesh(setup.scene, setup.mesh, &mesh_, &why)) return Fail(why, err);
+  // Only the mesh is needed from here on: the scene and its frame (each
+  // 100-200 bytes a face) are let go rather than kept for the whole run.
+  setup.scene = Scene();
+  std::string().swap(payload);
   frame.clear();
   proto::EncodeReady({mesh_.elems.size(), MeshHash(mesh_)}, &frame);
   if (!out_.Send(frame)) return kExitOk;
