@@ -281,6 +281,7 @@ void MasterRun::Run() {
                       [this](const Sample& s) { OnSample(s); },
                       [this](const std::string& line, bool warning) { Note(line, warning); });
   transport_->Shutdown();
+  transport_.reset();  // with -j 0 the hemicube's buffers, freed before the pictures
   progress_->Finish();
   const RunResult& r = result_;
   if (opts_.verbosity >= 2)
