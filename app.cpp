@@ -16,6 +16,7 @@
 #include "errorchart.h"
 #include "hosts.h"
 #include "inprocess.h"
+#include "memory.h"
 #include "pool.h"
 #include "ssh.h"
 #include "worker.h"
@@ -93,6 +94,13 @@ void MasterRun::Build() {
     Die(kExitUsage, err);
 
   const double t1 = MonotonicSeconds();
+  // Refused here rather than killed by the kernel later; and subdivision
+  // stops (with its warning) where the memory would run out.
+  const double usable = UsableMemory();
+  if (!FitsInMemory(EstimateMesh(scene_, opts_.mesh).elements, kMasterBytesPerElement, usable,
+                    &err))
+    Die(kExitUsage, opts_.scene_path + ": " + err);
+  sub_limit_ = std::min(opts_.sub.max_elements, long(usable / kMasterBytesPerElement));
   if (!BuildMesh(scene_, opts_.mesh, &mesh_, &err)) Die(kExitUsage, opts_.scene_path + ": " + err);
   const double t2 = MonotonicSeconds();
   if (opts_.verbosity >= 2)
@@ -141,7 +149,11 @@ void MasterRun::Build() {
     if (opts_.verbosity >= 2)
       std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", wave, mesh_.LeafCount());
   };
-  if (opts_.subdivide) subdivider_ = std::make_unique<Subdivider>(&mesh_, opts_.sub);
+  if (opts_.subdivide) {
+    SubdivideOptions sub = opts_.sub;
+    sub.max_elements = sub_limit_;
+    subdivider_ = std::make_unique<Subdivider>(&mesh_, sub);
+  }
   built_ = mesh_.LeafCount();
   StartWorkers();
   if (!opts_.resume_file.empty()) Resume();
@@ -333,7 +345,7 @@ void MasterRun::WriteOutputs() {
 
   if (subdivider_ && subdivider_->capped())
     std::fprintf(stderr, "radiosity: warning: subdivision stopped at %ld elements: the next "
-                         "pass would pass the limit of %d\n", long(mesh_.elems.size()), kMaxElements);
+                         "pass would pass the limit of %ld\n", long(mesh_.elems.size()), sub_limit_);
   if (r.status == RunStatus::kLimit)  // said even with -q: these are not converged numbers
     std::fprintf(stderr,
                  "radiosity: warning: did not converge: %s with unshot energy %.3g of "

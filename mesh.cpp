@@ -225,6 +225,22 @@ int Cuts(double length, double size) {
 
 }  // namespace
 
+MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts) {
+  MeshEstimate m;
+  const double ps =
+      opts.patch_size > 0 ? opts.patch_size : glm::length(scene.hi - scene.lo) / 16;
+  if (!(ps > 0)) return m;
+  for (const Face& f : scene.faces) {
+    double ext = 0;
+    for (const auto& p : f.verts) ext = std::max(ext, glm::length(p - f.verts[0]));
+    double n = std::ceil(ext / ps) * opts.elements_per_patch;
+    const double pieces = f.verts.size() > 4 ? double(f.verts.size() - 2) : 1.0;
+    m.elements += n * n * pieces;
+    m.vertices += (n + 1) * (n + 1) * pieces;
+  }
+  return m;
+}
+
 bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
                std::string* err) {
   *mesh = Mesh();
@@ -238,15 +254,8 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
   const int epp = opts.elements_per_patch;
 
   // Count first so an absurd patch size is refused before allocating.
-  double estimate = 0, vertices = 0;
-  for (const Face& f : scene.faces) {
-    double ext = 0;
-    for (const auto& p : f.verts) ext = std::max(ext, glm::length(p - f.verts[0]));
-    double n = std::ceil(ext / ps) * epp;
-    const double pieces = f.verts.size() > 4 ? double(f.verts.size() - 2) : 1.0;
-    estimate += n * n * pieces;
-    vertices += (n + 1) * (n + 1) * pieces;
-  }
+  const MeshEstimate size = EstimateMesh(scene, opts);
+  const double estimate = size.elements, vertices = size.vertices;
   if (estimate > kMaxElements) {
     char buf[160];
     std::snprintf(buf, sizeof buf,

@@ -129,6 +129,13 @@ struct Mesh {
 bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
                std::string* err);
 
+// The elements and vertices BuildMesh would make at most (before making
+// any): a face's extent over the patch size, cut as BuildMesh cuts it.
+struct MeshEstimate {
+  double elements = 0, vertices = 0;
+};
+MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts);
+
 // The most elements a mesh may have, built or divided. A run needs about
 // 0.85 KB per element (1.2 KB with subdivision's edge maps; measured on a
 // 200,709-face scene by bench/stiff.sh), so this is about 9 GB.
