@@ -17,6 +17,7 @@
 #include "files.h"
 #include "hosts.h"
 #include "inprocess.h"
+#include "memory.h"
 #include "pool.h"
 #include "ssh.h"
 #include "worker.h"
@@ -133,6 +134,7 @@ void MasterRun::Build() {
   // A closed stderr (piped into head, a gone terminal) is no reason to
   // lose the run: writes to it fail, the run goes on.
   std::signal(SIGPIPE, SIG_IGN);
+  const double t0 = MonotonicSeconds();
   const bool loaded = LoadScene(opts_.scene_path, &scene_, &err, &warnings);
   for (const std::string& w : warnings) Say("warning: " + w);
   if (!loaded) Die(kExitUsage, err);
@@ -153,10 +155,22 @@ void MasterRun::Build() {
     Die(kExitUsage, err);
   input("the --reference file", opts_.reference);
 
+  const double t1 = MonotonicSeconds();
+  // Refused here rather than killed by the kernel later; and subdivision
+  // stops (with its warning) where the memory would run out.
+  const double usable = UsableMemory();
+  if (!FitsInMemory(EstimateMesh(scene_, opts_.mesh).elements, kMasterBytesPerElement, usable,
+                    &err))
+    Die(kExitUsage, opts_.scene_path + ": " + err);
+  sub_limit_ = std::min(opts_.sub.max_elements, long(usable / kMasterBytesPerElement));
   if (!BuildMesh(scene_, opts_.mesh, &mesh_, &err)) Die(kExitUsage, opts_.scene_path + ": " + err);
+  const double t2 = MonotonicSeconds();
   if (opts_.verbosity >= 2)
-    std::fprintf(stderr, "radiosity: %zu faces, %zu patches, %zu elements (patch size %g)\n",
-                 scene_.faces.size(), mesh_.patches.size(), mesh_.elems.size(), mesh_.patch_size);
+    std::fprintf(stderr,
+                 "radiosity: %zu faces, %zu patches, %zu elements (patch size %g); "
+                 "loaded in %.2f s, meshed in %.2f s\n",
+                 scene_.faces.size(), mesh_.patches.size(), mesh_.elems.size(), mesh_.patch_size,
+                 t1 - t0, t2 - t1);
 
   // A checkpoint to resume is checked before anything is started; one to
   // write must be writable before the run starts.
@@ -196,10 +210,15 @@ void MasterRun::Build() {
     if (opts_.verbosity >= 2)
       std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", wave, mesh_.LeafCount());
   };
-  if (opts_.subdivide) subdivider_ = std::make_unique<Subdivider>(&mesh_, opts_.sub);
+  if (opts_.subdivide) {
+    SubdivideOptions sub = opts_.sub;
+    sub.max_elements = sub_limit_;
+    subdivider_ = std::make_unique<Subdivider>(&mesh_, sub);
+  }
   built_ = mesh_.LeafCount();
   StartWorkers();
   if (!opts_.resume_file.empty()) Resume();
+  DropVertices(&scene_);  // hashed, sent and meshed: 120 bytes a face freed
   if (!opts_.checkpoint_file.empty()) {
     run_.checkpoint_every = opts_.checkpoint_every;
     run_.checkpoint = [this](const RunState& state) { SaveCheckpoint(state); };
@@ -247,8 +266,12 @@ void MasterRun::StartWorkers() {
     return;
   }
   std::string err;
-  proto::SceneSetup setup{scene_, opts_.mesh, run_.resolution, run_.rotate, run_.seed};
-  auto pool = std::make_unique<WorkerPool>(std::move(setup), mesh_, opts_.pool);
+  // The scene is lent to the pool's encoder, not copied (hundreds of MB
+  // at 10^6 faces), and comes back for the results.
+  proto::SceneSetup setup{std::move(scene_), opts_.mesh, run_.resolution, run_.rotate, run_.seed,
+                          opts_.pool.heartbeat_s};
+  auto pool = std::make_unique<WorkerPool>(setup, mesh_, opts_.pool);
+  scene_ = std::move(setup.scene);
   if (pool->SceneTooLarge())
     Die(kExitUsage, opts_.scene_path + ": too large to send to workers (protocol limit " +
                         std::to_string(proto::kMaxFrame >> 20) + " MiB); use -j 0");
@@ -361,6 +384,7 @@ void MasterRun::Run() {
                       [this](const Sample& s) { OnSample(s); },
                       [this](const std::string& line, bool warning) { Note(line, warning); });
   transport_->Shutdown();
+  transport_.reset();  // with -j 0 the hemicube's buffers, freed before the pictures
   progress_->Finish();
   const RunResult& r = result_;
   if (opts_.verbosity >= 2)
@@ -426,7 +450,7 @@ void MasterRun::WriteOutputs() {
 
   if (subdivider_ && subdivider_->capped())
     std::fprintf(stderr, "radiosity: warning: subdivision stopped at %ld elements: the next "
-                         "pass would pass the limit of %d\n", long(mesh_.elems.size()), kMaxElements);
+                         "pass would pass the limit of %ld\n", long(mesh_.elems.size()), sub_limit_);
   if (r.status == RunStatus::kLimit)  // said even with -q: these are not converged numbers
     std::fprintf(stderr,
                  "radiosity: warning: did not converge: %s with unshot energy %.3g of "

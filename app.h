@@ -78,6 +78,7 @@ class MasterRun {
   std::unique_ptr<Subdivider> subdivider_;
   long built_ = 0;  // elements as built, before dividing
   std::unique_ptr<Transport> transport_;
+  long sub_limit_ = 0;  // elements subdivision may reach: kMaxElements, or what memory allows
   RunResult result_;
 };
 

@@ -27,24 +27,64 @@ glm::dvec3 EdgePoint(const glm::dvec3& p, const glm::dvec3& q, int k, int n) {
   return q + (p - q) * (double(n - k) / n);
 }
 
+// -0 and 0 are the same point (points are compared with ==).
+uint64_t HashBits(double d) {
+  if (d == 0) d = 0;
+  uint64_t b;
+  std::memcpy(&b, &d, 8);
+  return b;
+}
+
+size_t PointHash64(const glm::dvec3& p) {
+  return SplitMix64(SplitMix64(SplitMix64(HashBits(p.x)) ^ HashBits(p.y)) ^ HashBits(p.z));
+}
+
 // Vertex ids of one input face: points are welded by exact value so that
-// the pieces of a split polygon share their common edges.
+// the pieces of a split polygon share their common edges. An
+// open-addressing table of ids, kept from face to face (a hash map per
+// face cost a third of BuildMesh at 10^6 faces).
 class FaceVerts {
  public:
   explicit FaceVerts(std::vector<glm::dvec3>* verts) : verts_(verts) {}
+  void NextFace() {
+    for (size_t i : used_) table_[i] = -1;
+    used_.clear();
+  }
   int Id(const glm::dvec3& p) {
-    auto [it, added] = ids_.try_emplace(p, int(verts_->size()));
-    if (added) verts_->push_back(p);
-    return it->second;
+    if (2 * (used_.size() + 1) > table_.size()) Grow();
+    const size_t mask = table_.size() - 1;
+    size_t i = PointHash64(p) & mask;
+    for (; table_[i] >= 0; i = (i + 1) & mask)
+      if ((*verts_)[table_[i]] == p) return table_[i];
+    table_[i] = int(verts_->size());
+    used_.push_back(i);
+    verts_->push_back(p);
+    return table_[i];
   }
 
  private:
+  void Grow() {
+    std::vector<int> ids;
+    for (size_t i : used_) ids.push_back(table_[i]);
+    table_.assign(std::max<size_t>(64, 2 * table_.size()), -1);
+    used_.clear();
+    const size_t mask = table_.size() - 1;
+    for (int id : ids) {
+      size_t i = PointHash64((*verts_)[id]) & mask;
+      while (table_[i] >= 0) i = (i + 1) & mask;
+      table_[i] = id;
+      used_.push_back(i);
+    }
+  }
+
   std::vector<glm::dvec3>* verts_;
-  std::unordered_map<glm::dvec3, int, PointHash> ids_;
+  std::vector<int> table_;
+  std::vector<size_t> used_;
 };
 
 double PolyArea(const Mesh& m, const Element& e) {
-  std::vector<glm::dvec3> p;
+  thread_local std::vector<glm::dvec3> p;  // no allocation per element
+  p.clear();
   for (int k = 0; k < (e.IsTriangle() ? 3 : 4); ++k) p.push_back(m.verts[e.v[k]]);
   return glm::length(AreaVector(p));
 }
@@ -185,6 +225,22 @@ int Cuts(double length, double size) {
 
 }  // namespace
 
+MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts) {
+  MeshEstimate m;
+  const double ps =
+      opts.patch_size > 0 ? opts.patch_size : glm::length(scene.hi - scene.lo) / 16;
+  if (!(ps > 0)) return m;
+  for (const Face& f : scene.faces) {
+    double ext = 0;
+    for (const auto& p : f.verts) ext = std::max(ext, glm::length(p - f.verts[0]));
+    double n = std::ceil(ext / ps) * opts.elements_per_patch;
+    const double pieces = f.verts.size() > 4 ? double(f.verts.size() - 2) : 1.0;
+    m.elements += n * n * pieces;
+    m.vertices += (n + 1) * (n + 1) * pieces;
+  }
+  return m;
+}
+
 bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
                std::string* err) {
   *mesh = Mesh();
@@ -198,13 +254,8 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
   const int epp = opts.elements_per_patch;
 
   // Count first so an absurd patch size is refused before allocating.
-  double estimate = 0;
-  for (const Face& f : scene.faces) {
-    double ext = 0;
-    for (const auto& p : f.verts) ext = std::max(ext, glm::length(p - f.verts[0]));
-    double n = std::ceil(ext / ps) * epp;
-    estimate += n * n * (f.verts.size() > 4 ? double(f.verts.size() - 2) : 1.0);
-  }
+  const MeshEstimate size = EstimateMesh(scene, opts);
+  const double estimate = size.elements, vertices = size.vertices;
   if (estimate > kMaxElements) {
     char buf[160];
     std::snprintf(buf, sizeof buf,
@@ -215,6 +266,14 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
     return false;
   }
 
+  // Reserved from the estimates (at most a few times too much; pages never
+  // written cost no memory): growing by doubling wrote every array two or
+  // three times over, most of BuildMesh's time at 10^6 faces.
+  mesh->faces.reserve(scene.faces.size());
+  mesh->elems.reserve(size_t(estimate));
+  mesh->verts.reserve(size_t(vertices));
+  mesh->patches.reserve(size_t(estimate) / size_t(epp * epp) + scene.faces.size());
+  FaceVerts fv(&mesh->verts);
   for (size_t fi = 0; fi < scene.faces.size(); ++fi) {
     const Face& f = scene.faces[fi];
     const Material& mat = scene.materials[f.material];
@@ -230,7 +289,7 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
     mesh->faces.push_back(mf);
 
     mesh->faces[face].vbegin = int(mesh->verts.size());
-    FaceVerts fv(&mesh->verts);
+    fv.NextFace();
     Builder b{mesh, face, epp, &fv, {}};
     const auto& v = f.verts;
     if (v.size() == 3) {
@@ -307,41 +366,130 @@ int Corners(const Element& e) { return e.IsTriangle() ? 3 : 4; }
 
 uint64_t Undirected(int a, int b) { return a < b ? EdgeKey(a, b) : EdgeKey(b, a); }
 
-int Find(const std::unordered_map<uint64_t, int>& m, uint64_t key) {
-  auto it = m.find(key);
-  return it == m.end() ? -1 : it->second;
-}
+int32_t Slot(int elem, int k) { return int32_t(elem) * 4 + k; }
 
-void Own(Mesh* m, int elem, bool add) {
-  const Element& e = m->elems[elem];
-  for (int k = 0, n = Corners(e); k < n; ++k) {
-    const uint64_t key = EdgeKey(e.v[k], e.v[(k + 1) % n]);
-    if (add) m->owner[key] = elem;
-    else m->owner.erase(key);
-  }
-}
-
-Segment Seg(const Mesh& m, int a, int b) {
-  const glm::dvec3 &p = m.verts[a], &q = m.verts[b];
-  return LexLess(p, q) ? Segment(p, q) : Segment(q, p);
-}
-
-// Adds `elem`'s edges that have no neighbour in its face to Mesh::border,
-// or takes all its edges out.
-void Border(Mesh* m, int elem, bool add) {
-  const Element& e = m->elems[elem];
-  for (int k = 0, n = Corners(e); k < n; ++k) {
-    const int p = e.v[k], q = e.v[(k + 1) % n];
-    if (!add) {
-      auto it = m->border.find(Seg(*m, p, q));
-      if (it == m->border.end()) continue;
-      auto& v = it->second;
-      v.erase(std::remove(v.begin(), v.end(), elem), v.end());
-      if (v.empty()) m->border.erase(it);
-    } else if (Find(m->owner, EdgeKey(q, p)) < 0) {
-      m->border[Seg(*m, p, q)].push_back(elem);
+// The element (leaf or divided) whose edge k runs a -> b, or -1. Elements
+// of a face never overlap, so there is at most one; divided ones stay in
+// the lists, which is how MidpointOf() finds the midpoints they made.
+int EdgeElement(const Mesh& m, int a, int b, int* k) {
+  for (int32_t s = m.out_head[a]; s >= 0; s = m.out_next[s]) {
+    const Element& e = m.elems[s >> 2];
+    if (e.v[((s & 3) + 1) % Corners(e)] == b) {
+      *k = s & 3;
+      return s >> 2;
     }
   }
+  return -1;
+}
+
+// The leaf with edge a -> b, or -1.
+int Owner(const Mesh& m, int a, int b) {
+  int k;
+  const int e = EdgeElement(m, a, b, &k);
+  return e >= 0 && m.elems[e].IsLeaf() ? e : -1;
+}
+
+// Puts the edges of element `elem` (new, or all at ConnectEdges) in the
+// vertices' lists.
+void Link(Mesh* m, int elem) {
+  const Element& e = m->elems[elem];
+  m->out_next.resize(4 * m->elems.size(), -1);
+  m->border_bits.resize(m->elems.size(), 0);
+  for (int k = 0, n = Corners(e); k < n; ++k) {
+    m->out_next[Slot(elem, k)] = m->out_head[e.v[k]];
+    m->out_head[e.v[k]] = Slot(elem, k);
+  }
+}
+
+// A segment's hash by its end points in lexicographic order.
+size_t SegmentHash(const glm::dvec3& p, const glm::dvec3& q) {
+  const bool lo = LexLess(p, q);
+  return SplitMix64(PointHash64(lo ? p : q) * 31 ^ PointHash64(lo ? q : p));
+}
+
+size_t SlotHash(const Mesh& m, int32_t s) {
+  const Element& e = m.elems[s >> 2];
+  const int k = s & 3;
+  return SegmentHash(m.verts[e.v[k]], m.verts[e.v[(k + 1) % Corners(e)]]);
+}
+
+void BorderPut(std::vector<int32_t>* table, const Mesh& m, int32_t s) {
+  const size_t mask = table->size() - 1;
+  size_t i = SlotHash(m, s) & mask;
+  while ((*table)[i] >= 0) i = (i + 1) & mask;
+  (*table)[i] = s;
+}
+
+// Makes room for `more` entries: linear probing at most 3/4 full, 4 bytes
+// a slot, so 5 to 11 bytes per border edge.
+void BorderReserve(Mesh* m, size_t more) {
+  size_t size = std::max<size_t>(64, m->border.size());
+  while (4 * (m->border_count + more) > 3 * size) size *= 2;
+  if (size == m->border.size()) return;
+  std::vector<int32_t> grown(size, -1);
+  for (int32_t x : m->border)
+    if (x >= 0) BorderPut(&grown, *m, x);
+  m->border.swap(grown);
+}
+
+void BorderAdd(Mesh* m, int32_t s) {
+  BorderReserve(m, 1);
+  BorderPut(&m->border, *m, s);
+  ++m->border_count;
+}
+
+// Takes slot s out, moving later entries of its probe run back (no
+// tombstones).
+void BorderRemove(Mesh* m, int32_t s) {
+  std::vector<int32_t>& t = m->border;
+  const size_t mask = t.size() - 1;
+  size_t i = SlotHash(*m, s) & mask;
+  while (t[i] != s) {
+    CHECK(t[i] >= 0);
+    i = (i + 1) & mask;
+  }
+  for (size_t j = (i + 1) & mask; t[j] >= 0; j = (j + 1) & mask) {
+    const size_t home = SlotHash(*m, t[j]) & mask;
+    // t[j] may move to i unless its home lies cyclically in (i, j].
+    if ((j > i && (home <= i || home > j)) || (j < i && home <= i && home > j)) {
+      t[i] = t[j];
+      i = j;
+    }
+  }
+  t[i] = -1;
+  --m->border_count;
+}
+
+// Elements with a border edge from p to q (either way), in increasing id.
+void BorderFind(const Mesh& m, const glm::dvec3& p, const glm::dvec3& q, std::vector<int>* out) {
+  out->clear();
+  if (m.border.empty()) return;
+  const size_t mask = m.border.size() - 1;
+  for (size_t i = SegmentHash(p, q) & mask; m.border[i] >= 0; i = (i + 1) & mask) {
+    const int32_t s = m.border[i];
+    const Element& e = m.elems[s >> 2];
+    const glm::dvec3& a = m.verts[e.v[s & 3]];
+    const glm::dvec3& b = m.verts[e.v[((s & 3) + 1) % Corners(e)]];
+    if ((a == p && b == q) || (a == q && b == p)) out->push_back(s >> 2);
+  }
+  std::sort(out->begin(), out->end());
+  out->erase(std::unique(out->begin(), out->end()), out->end());
+}
+
+// Adds `elem`'s edges that have no neighbour in its face to the border
+// table, or takes all its edges out.
+void Border(Mesh* m, int elem, bool add) {
+  const Element& e = m->elems[elem];
+  uint8_t& bits = m->border_bits[elem];
+  for (int k = 0, n = Corners(e); k < n; ++k) {
+    if (!add) {
+      if (bits >> k & 1) BorderRemove(m, Slot(elem, k));
+    } else if (Owner(*m, e.v[(k + 1) % n], e.v[k]) < 0) {
+      bits |= uint8_t(1 << k);
+      BorderAdd(m, Slot(elem, k));
+    }
+  }
+  if (!add) bits = 0;
 }
 
 // Element n's edge (p, q) (its own vertex ids) becomes home to T-vertex v.
@@ -350,12 +498,13 @@ void SetMid(Element* n, int p, int q, int v) {
     if (n->v[k] == p && n->v[(k + 1) % c] == q) n->mid[k] = v;
 }
 
-int NewMidpoint(Mesh* m, int face, int a, int b, const glm::dvec3& p) {
+// A vertex Divide() makes: on an edge (a, b), or a quad's centre (a < 0).
+int AddVertex(Mesh* m, int face, int a, int b, const glm::dvec3& p) {
   const int v = int(m->verts.size());
   m->verts.push_back(p);
   m->faces[face].divide_verts.push_back(v);
-  m->midpoint.emplace(Undirected(a, b), v);
-  m->split.emplace(v, Undirected(a, b));
+  m->out_head.push_back(-1);
+  m->split.push_back(a < 0 ? kNoEdge : Undirected(a, b));
   return v;
 }
 
@@ -364,18 +513,18 @@ int NewMidpoint(Mesh* m, int face, int a, int b, const glm::dvec3& p) {
 // it is a leaf with that very edge) then holds as a T-vertex; so do leaves
 // of other faces along the same edge, with a copy of their own.
 int Midpoint(Mesh* m, int face, int a, int b) {
-  if (int v = Find(m->midpoint, Undirected(a, b)); v >= 0) return v;
+  if (int v = MidpointOf(*m, a, b); v >= 0) return v;
   const glm::dvec3 p = EdgePoint(m->verts[a], m->verts[b], 1, 2);
-  const int v = NewMidpoint(m, face, a, b, p);
-  if (int n = Find(m->owner, EdgeKey(b, a)); n >= 0) {
+  const int v = AddVertex(m, face, a, b, p);
+  if (int n = Owner(*m, b, a); n >= 0) {
     SetMid(&m->elems[n], b, a, v);
     return v;
   }
-  auto it = m->border.find(Seg(*m, a, b));
-  if (it == m->border.end()) return v;
-  // Copies: NewMidpoint() below grows (and may move) m->verts.
+  // Copies: AddVertex() below grows (and may move) m->verts.
   const glm::dvec3 pa = m->verts[a], pb = m->verts[b];
-  for (int n : it->second) {
+  std::vector<int> along;
+  BorderFind(*m, pa, pb, &along);
+  for (int n : along) {
     Element& ne = m->elems[n];
     const int nf = m->patches[ne.patch].face;
     if (nf == face || !ne.IsLeaf()) continue;
@@ -383,7 +532,7 @@ int Midpoint(Mesh* m, int face, int a, int b) {
       const int x = ne.v[k], y = ne.v[(k + 1) % c];
       const glm::dvec3 px = m->verts[x], py = m->verts[y];
       if (ne.mid[k] >= 0 || !((px == pa && py == pb) || (px == pb && py == pa))) continue;
-      ne.mid[k] = NewMidpoint(m, nf, x, y, p);
+      ne.mid[k] = AddVertex(m, nf, x, y, p);
     }
   }
   return v;
@@ -391,13 +540,50 @@ int Midpoint(Mesh* m, int face, int a, int b) {
 
 }  // namespace
 
+int MidpointOf(const Mesh& m, int a, int b) {
+  int k;
+  for (int pass = 0; pass < 2; ++pass, std::swap(a, b)) {
+    const int e = EdgeElement(m, a, b, &k);
+    if (e < 0) continue;
+    const Element& el = m.elems[e];
+    if (el.IsLeaf()) {
+      if (el.mid[k] >= 0) return el.mid[k];
+      continue;
+    }
+    // The children as Divide() lays them out: child 0 starts v[0], mid[0]
+    // and ends mid[last]; child 1 holds mid[1] after v[1]; a quad's child
+    // 2 ends with mid[2].
+    const Element* c = &m.elems[el.first_child];
+    const int n = Corners(el);
+    if (k == 0) return c[0].v[1];
+    if (k == n - 1) return c[0].v[n - 1];
+    return k == 1 ? c[1].v[2] : c[2].v[3];
+  }
+  return -1;
+}
+
 void ConnectEdges(Mesh* mesh) {
   if (mesh->connected) return;
   mesh->connected = true;
+  mesh->out_head.assign(mesh->verts.size(), -1);
+  mesh->split_base = int32_t(mesh->verts.size());
   for (size_t e = 0; e < mesh->elems.size(); ++e)
-    if (mesh->elems[e].IsLeaf()) Own(mesh, int(e), true);
-  for (size_t e = 0; e < mesh->elems.size(); ++e)
-    if (mesh->elems[e].IsLeaf()) Border(mesh, int(e), true);
+    if (mesh->elems[e].IsLeaf()) Link(mesh, int(e));
+  // The border edges first, then a table of the right size: growing it
+  // edge by edge would rehash (from the geometry, out of cache) ever again.
+  std::vector<int32_t> border;
+  mesh->border_bits.assign(mesh->elems.size(), 0);
+  for (size_t e = 0; e < mesh->elems.size(); ++e) {
+    const Element& el = mesh->elems[e];
+    for (int k = 0, n = Corners(el); k < n && el.IsLeaf(); ++k)
+      if (Owner(*mesh, el.v[(k + 1) % n], el.v[k]) < 0) {
+        mesh->border_bits[e] |= uint8_t(1 << k);
+        border.push_back(Slot(int(e), k));
+      }
+  }
+  BorderReserve(mesh, border.size());
+  for (int32_t s : border) BorderPut(&mesh->border, *mesh, s);
+  mesh->border_count = border.size();
 }
 
 void Divide(Mesh* mesh, int32_t elem) {
@@ -414,14 +600,11 @@ void Divide(Mesh* mesh, int32_t elem) {
     kids = {{{v[0], mid[0], mid[2], -1}, {mid[0], v[1], mid[1], -1},
              {mid[2], mid[1], v[2], -1}, {mid[0], mid[1], mid[2], -1}}};
   } else {
-    const int c = int(mesh->verts.size());
     const auto& p = mesh->verts;
-    mesh->verts.push_back(0.25 * (p[v[0]] + p[v[1]] + p[v[2]] + p[v[3]]));
-    mesh->faces[face].divide_verts.push_back(c);
+    const int c = AddVertex(mesh, face, -1, -1, 0.25 * (p[v[0]] + p[v[1]] + p[v[2]] + p[v[3]]));
     kids = {{{v[0], mid[0], c, mid[3]}, {mid[0], v[1], mid[1], c},
              {c, mid[1], v[2], mid[2]}, {mid[3], c, mid[2], v[3]}}};
   }
-  Own(mesh, elem, false);
   Border(mesh, elem, false);
   ++mesh->divided;
   const int first = int(mesh->elems.size());
@@ -435,10 +618,9 @@ void Divide(Mesh* mesh, int32_t elem) {
     child.area = PolyArea(*mesh, child);
     // A neighbour already finer than the parent by two levels leaves a
     // T-vertex on the child's edge (the subdivision policy avoids it).
-    for (int k = 0; k < n; ++k)
-      child.mid[k] = Find(mesh->midpoint, Undirected(kv[k], kv[(k + 1) % n]));
+    for (int k = 0; k < n; ++k) child.mid[k] = MidpointOf(*mesh, kv[k], kv[(k + 1) % n]);
     mesh->elems.push_back(child);
-    Own(mesh, int(mesh->elems.size()) - 1, true);
+    Link(mesh, int(mesh->elems.size()) - 1);
   }
   for (int k = 0; k < kChildren; ++k) Border(mesh, first + k, true);
 }
@@ -460,7 +642,7 @@ void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out) {
   out->clear();
   const Element& e = mesh.elems[elem];
   auto add = [&](int a, int b) {
-    int n = Find(mesh.owner, EdgeKey(a, b));
+    const int n = Owner(mesh, a, b);
     if (n >= 0 && std::find(out->begin(), out->end(), n) == out->end()) out->push_back(n);
     return n >= 0;
   };
@@ -474,9 +656,9 @@ void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out) {
     }
     // Coarser: p -> q is half of the neighbour's edge, split at p or q.
     for (int s : {p, q}) {
-      auto it = mesh.split.find(s);
-      if (it == mesh.split.end()) continue;
-      const int r0 = int(it->second >> 32), r1 = int(uint32_t(it->second));
+      if (s < mesh.split_base || mesh.split[s - mesh.split_base] == kNoEdge) continue;
+      const uint64_t edge = mesh.split[s - mesh.split_base];
+      const int r0 = int(edge >> 32), r1 = int(uint32_t(edge));
       const int other = s == p ? q : p;
       if (other != r0 && other != r1) continue;
       // Our way along the coarse edge runs from `from` to `to`.

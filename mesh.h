@@ -20,7 +20,6 @@
 #include <cstdint>
 #include <functional>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -78,15 +77,6 @@ struct PointHash {
   }
 };
 
-// A segment by its end points in lexicographic order: an edge that faces
-// (with their own vertex ids) share.
-using Segment = std::pair<glm::dvec3, glm::dvec3>;
-struct SegmentHash {
-  size_t operator()(const Segment& s) const {
-    return PointHash()(s.first) * 31 ^ PointHash()(s.second);
-  }
-};
-
 struct MeshOptions {
   // Largest patch edge; 0 picks the default rule: the scene's bounding-box
   // diagonal / 16 (see man page, MESH).
@@ -103,14 +93,24 @@ struct Mesh {
   double patch_size = 0.0;     // as used
   double scene_diagonal = 0.0; // bounding-box diagonal, the scene's scale
 
-  // Kept by Divide(), keyed by a vertex id pair (EdgeKey; vertex ids are
-  // per face, so these never join two faces):
-  std::unordered_map<uint64_t, int> midpoint;  // undirected edge -> its midpoint
-  std::unordered_map<int, uint64_t> split;     // midpoint -> its undirected edge
-  std::unordered_map<uint64_t, int> owner;     // directed edge -> the leaf with it,
-  // Leaves with an edge on their face's border, by the edge's points: the
+  // Adjacency for Divide() and LeafNeighbours(), made by ConnectEdges()
+  // and kept by Divide(): flat arrays indexed by vertex or by edge slot
+  // 4 × element + k (edge k of an element runs v[k] -> v[k+1]), about 45
+  // bytes per element in all (README, Layout). Vertex ids are per face, so
+  // none of it joins two faces but `border`.
+  std::vector<int32_t> out_head;  // per vertex: a slot whose edge leaves it, or -1
+  std::vector<int32_t> out_next;  // per slot: the next slot leaving the same vertex
+  // Per vertex Divide() added (from split_base): the undirected edge
+  // (EdgeKey(min, max)) it is the midpoint of; kNoEdge for a quad's centre.
+  std::vector<uint64_t> split;
+  int32_t split_base = 0;
+  // Leaves' edges with no leaf of their face on the exact reverse edge when
+  // they were made (bit k per element), and an open-addressing table of
+  // those slots (-1: empty) hashed by the edge's two points: the
   // neighbours in other faces, which get a copy of a midpoint made there.
-  std::unordered_map<Segment, std::vector<int>, SegmentHash> border;
+  std::vector<uint8_t> border_bits;
+  std::vector<int32_t> border;
+  size_t border_count = 0;
   bool connected = false;                      // once ConnectEdges() ran
   int divided = 0;                             // Divide() calls so far
 
@@ -129,6 +129,13 @@ struct Mesh {
 bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
                std::string* err);
 
+// The elements and vertices BuildMesh would make at most (before making
+// any): a face's extent over the patch size, cut as BuildMesh cuts it.
+struct MeshEstimate {
+  double elements = 0, vertices = 0;
+};
+MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts);
+
 // The most elements a mesh may have, built or divided. A run needs about
 // 0.85 KB per element (1.2 KB with subdivision's edge maps; measured on a
 // 200,709-face scene by bench/stiff.sh), so this is about 9 GB.
@@ -142,12 +149,18 @@ constexpr int kMaxElements = 8'000'000;
 // share no vertices) as a T-vertex.
 void Divide(Mesh* mesh, int32_t elem);
 
-// Fills Mesh::owner for the leaves (once; Divide() keeps it since). Not
-// done by BuildMesh: a run without subdivision needs no adjacency.
+// Fills the adjacency arrays for the leaves (once; Divide() keeps them
+// since). Not done by BuildMesh: a run without subdivision needs none.
 void ConnectEdges(Mesh* mesh);
 
 // The key of the edge a -> b: directed (a, b) or undirected (min, max).
 inline uint64_t EdgeKey(int a, int b) { return uint64_t(uint32_t(a)) << 32 | uint32_t(b); }
+constexpr uint64_t kNoEdge = ~uint64_t{0};
+
+// The midpoint Divide() made (or a neighbour holds as a T-vertex) on the
+// edge between vertices a and b, either way round, or -1. Needs
+// ConnectEdges().
+int MidpointOf(const Mesh& mesh, int a, int b);
 
 // The outline of element `e`: its corners and the T-vertices on its
 // edges, counter-clockwise, from its first T-vertex if it has one (so a

@@ -123,12 +123,11 @@ std::unique_ptr<Conn> SocketConn(int fd) {
   return std::make_unique<LocalConn>(fd, -1);
 }
 
-WorkerPool::WorkerPool(proto::SceneSetup setup, const Mesh& mesh,
+WorkerPool::WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh,
                        const PoolOptions& opts, Clock* clock)
     : mesh_(mesh), base_elements_(mesh.elems.size()), mesh_hash_(MeshHash(mesh)),
       opts_(opts), clock_(clock), epoch_(clock->Now()) {
   proto::EncodeHello(proto::Hello(), &scene_frame_);
-  setup.heartbeat_s = opts.heartbeat_s;  // the workers' heartbeats: ours
   proto::EncodeScene(setup, &scene_frame_);
 }
 

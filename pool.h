@@ -85,9 +85,9 @@ class WorkerSource {
 class WorkerPool : public Transport {
  public:
   // Deadlines and heartbeats go by `clock` (tests drive it). `setup` is
-  // taken by value: it holds the whole scene, and a caller done with it
-  // moves it in rather than have it copied.
-  WorkerPool(proto::SceneSetup setup, const Mesh& mesh, const PoolOptions& opts,
+  // encoded at once and not kept: the pool holds the scene frame only.
+  // Its heartbeat_s is the workers' (normally opts.heartbeat_s).
+  WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh, const PoolOptions& opts,
              Clock* clock = MonotonicClock());
   ~WorkerPool() override;
   // The scene frame is larger than the protocol allows (a scene of some

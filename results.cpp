@@ -9,7 +9,6 @@
 #include <cstring>
 #include <cstdlib>
 #include <sstream>
-#include <unordered_map>
 
 #include "check.h"
 #include "files.h"
@@ -233,35 +232,52 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   // Faces do not share vertices, but where two faces of one material lie in
   // one plane (a floor cut round a rug, a ceiling round a light) a seam
   // would show: their coincident vertices are averaged together.
-  struct Key {
-    glm::dvec3 p;
-    long long n[3];
-    int material;
-    bool operator==(const Key& o) const {
-      return p == o.p && n[0] == o.n[0] && n[1] == o.n[1] && n[2] == o.n[2] &&
-             material == o.material;
-    }
+  // Vertices join when point, material and normal (to 1e-6) agree: an
+  // open-addressing table of one vertex per group (4 bytes a slot, the key
+  // read from the vertex and its face), not a hash map of keys (90 bytes a
+  // vertex, the largest thing the master held at 10^6 elements).
+  std::vector<int> face_of(mesh.verts.size(), -1);
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    for (int v = mesh.faces[f].vbegin; v < mesh.faces[f].vend; ++v) face_of[v] = int(f);
+    for (int v : mesh.faces[f].divide_verts) face_of[v] = int(f);
+  }
+  auto normal_key = [&](int v, int k) {
+    return std::llround(mesh.faces[face_of[v]].normal[k] * 1e6);
   };
-  struct Hash {
-    size_t operator()(const Key& k) const {
-      return PointHash()(k.p) ^ size_t(k.n[0] ^ k.n[1] ^ k.n[2]) ^ size_t(k.material) * 101;
-    }
+  auto same = [&](int a, int b) {
+    return mesh.verts[a] == mesh.verts[b] &&
+           mesh.faces[face_of[a]].material == mesh.faces[face_of[b]].material &&
+           normal_key(a, 0) == normal_key(b, 0) && normal_key(a, 1) == normal_key(b, 1) &&
+           normal_key(a, 2) == normal_key(b, 2);
   };
-  std::unordered_map<Key, int, Hash> group_of;
+  auto hash = [&](int v) {
+    return PointHash()(mesh.verts[v]) ^
+           size_t(normal_key(v, 0) ^ normal_key(v, 1) ^ normal_key(v, 2)) ^
+           size_t(mesh.faces[face_of[v]].material) * 101;
+  };
+  size_t slots = 16;
+  while (slots < 2 * mesh.verts.size()) slots *= 2;
+  std::vector<int> first(slots, -1);  // a group's first vertex
   std::vector<int> group(mesh.verts.size());
+  int groups = 0;
   for (const MeshFace& f : mesh.faces) {
     auto join = [&](int v) {
-      Key k{mesh.verts[v],
-            {std::llround(f.normal.x * 1e6), std::llround(f.normal.y * 1e6),
-             std::llround(f.normal.z * 1e6)},
-            f.material};
-      group[v] = group_of.emplace(k, int(group_of.size())).first->second;
+      size_t i = hash(v) & (slots - 1);
+      while (first[i] >= 0 && !same(first[i], v)) i = (i + 1) & (slots - 1);
+      if (first[i] < 0) {
+        first[i] = v;
+        group[v] = groups++;
+      } else {
+        group[v] = group[first[i]];
+      }
     };
     for (int v = f.vbegin; v < f.vend; ++v) join(v);
     for (int v : f.divide_verts) join(v);
   }
-  std::vector<glm::dvec3> gsum(group_of.size(), glm::dvec3(0.0));
-  std::vector<double> gw(group_of.size(), 0.0);
+  std::vector<int>().swap(first);
+  std::vector<int>().swap(face_of);
+  std::vector<glm::dvec3> gsum(static_cast<size_t>(groups), glm::dvec3(0.0));
+  std::vector<double> gw(static_cast<size_t>(groups), 0.0);
   for (size_t v = 0; v < sum.size(); ++v) {
     gsum[group[v]] += sum[v];
     gw[group[v]] += w[v];
@@ -275,8 +291,8 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   // finer element may itself be a T-vertex of a coarser one.
   std::stable_sort(t_leaves.begin(), t_leaves.end(),
                    [&](int a, int b) { return mesh.elems[a].level < mesh.elems[b].level; });
-  std::vector<glm::vec3> on_edge(group_of.size());
-  std::vector<char> is_t(group_of.size(), 0);
+  std::vector<glm::vec3> on_edge(static_cast<size_t>(groups));
+  std::vector<char> is_t(static_cast<size_t>(groups), 0);
   auto color = [&](int v) { return is_t[group[v]] ? on_edge[group[v]] : s.colors[v]; };
   for (int e : t_leaves) {
     const Element& el = mesh.elems[e];

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -63,17 +64,24 @@ std::string Num(double x) {
   return buf;
 }
 
+// Tokens into *out, which keeps its capacity from line to line.
+void SplitInto(std::string_view s, std::vector<std::string_view>* out) {
+  out->clear();
+  const char *p = s.data(), *end = p + s.size();
+  while (true) {
+    while (p != end && (*p == ' ' || *p == '\t')) ++p;
+    if (p == end) return;
+    const char* q = p;
+    while (q != end && *q != ' ' && *q != '\t') ++q;
+    out->emplace_back(p, size_t(q - p));
+    p = q;
+  }
+}
+
 std::vector<std::string_view> Split(std::string_view s) {
   std::vector<std::string_view> out;
-  size_t i = 0;
-  while (true) {
-    while (i < s.size() && (s[i] == ' ' || s[i] == '\t')) ++i;
-    if (i == s.size()) return out;
-    size_t j = i;
-    while (j < s.size() && s[j] != ' ' && s[j] != '\t') ++j;
-    out.push_back(s.substr(i, j - i));
-    i = j;
-  }
+  SplitInto(s, &out);
+  return out;
 }
 
 std::string_view Trim(std::string_view s) {
@@ -88,7 +96,16 @@ std::string_view Rest(std::string_view line, std::string_view keyword) {
 }
 
 // Parses a whole token as a finite double. Returns "" or what is wrong.
+// std::from_chars first (no copy, no locale; correctly rounded like
+// strtod, so the same value); strtod for what it does not take whole
+// (a '+', hex, out of range), with strtod's messages.
 std::string ParseDouble(std::string_view tok, double* out) {
+  double fast;
+  const auto [stop, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), fast);
+  if (ec == std::errc() && stop == tok.data() + tok.size() && std::isfinite(fast)) {
+    *out = fast;
+    return "";
+  }
   std::string s(tok);  // strtod needs a terminator
   char* end = nullptr;
   errno = 0;
@@ -103,6 +120,12 @@ std::string ParseDouble(std::string_view tok, double* out) {
 
 // Parses a whole token as an integer. Returns "" or what is wrong.
 std::string ParseLong(std::string_view tok, long long* out) {
+  long long fast;
+  const auto [stop, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), fast);
+  if (ec == std::errc() && stop == tok.data() + tok.size()) {
+    *out = fast;
+    return "";
+  }
   std::string s(tok);
   char* end = nullptr;
   errno = 0;
@@ -157,12 +180,14 @@ class LineReader {
   const std::string& error() const { return error_; }
 
  private:
+  // Branch-free, so that it vectorises: every byte of the file goes here.
   static bool HasControl(const char* s, size_t n) {
+    bool any = false;
     for (size_t i = 0; i < n; ++i) {
       unsigned char c = static_cast<unsigned char>(s[i]);
-      if ((c < 0x20 && c != '\t' && c != '\r') || c == 0x7f) return true;
+      any |= ((c < 0x20) & (c != '\t') & (c != '\r')) | (c == 0x7f);
     }
-    return false;
+    return any;
   }
 
   std::FILE* f_;
@@ -174,6 +199,9 @@ class LineReader {
 // "" if the line is text, else what is wrong. Tabs are whitespace; a CR
 // is only legal as part of a CRLF ending, which LineReader removed.
 std::string CheckText(const std::string& line) {
+  bool any = false;  // the common case first, branch-free (it vectorises)
+  for (unsigned char c : line) any |= ((c < 0x20) & (c != '\t')) | (c == 0x7f);
+  if (!any) return "";
   for (unsigned char c : line) {
     if ((c < 0x20 && c != '\t') || c == 0x7f) {
       char buf[64];
@@ -216,6 +244,7 @@ class Loader {
   std::string err_;
   std::vector<std::string>* warnings_;
   std::vector<glm::dvec3> verts_;
+  std::vector<std::string_view> tokens_;  // of the current line
   std::map<std::string, int> materials_{{"default", 0}};  // name -> index into s_.materials
   std::map<std::string, int> objects_{{"default", 0}};    // name -> index into s_.objects
   std::set<std::string> mtl_loaded_;
@@ -269,7 +298,8 @@ bool Loader::Statement(const std::string& path, long ln, const std::string& raw)
     }
     line = line.substr(0, hash);
   }
-  std::vector<std::string_view> t = Split(line);
+  std::vector<std::string_view>& t = tokens_;
+  SplitInto(line, &t);
   if (t.empty()) return true;
   const std::string_view kw = t[0];
   if (kw == "v") {
@@ -338,22 +368,24 @@ bool Loader::FaceLine(const std::string& path, long ln, const std::vector<std::s
     return Fail(path, ln, "f: a polygon of " + std::to_string(t.size() - 1) +
                               " vertices (the limit is " + std::to_string(kMaxPolygon) + ")");
   Face face;
+  face.verts.reserve(t.size() - 1);
   const long n = static_cast<long>(verts_.size());
   for (size_t i = 1; i < t.size(); ++i) {
     // v, v/vt, v/vt/vn or v//vn; vt and vn must be integers but are unused.
     const std::string_view ref = t[i];
-    std::vector<std::string_view> parts;
+    std::string_view parts[3];
+    size_t count = 0;  // parts found; past 3 the reference is malformed
     for (size_t start = 0;;) {
       size_t slash = ref.find('/', start);
-      parts.push_back(ref.substr(start, slash - start));
+      if (count < 3) parts[count] = ref.substr(start, slash - start);
+      ++count;
       if (slash == std::string_view::npos) break;
       start = slash + 1;
     }
-    bool shape_ok = parts.size() <= 3 && !(parts.size() > 1 && parts[0].empty());
-    for (size_t p = 1; shape_ok && p < parts.size(); ++p) {
+    bool shape_ok = count <= 3 && !(count > 1 && parts[0].empty());
+    for (size_t p = 1; shape_ok && p < count; ++p) {
       long long unused;
-      shape_ok = parts[p].empty() ? p == 1 && parts.size() == 3
-                                  : ParseLong(parts[p], &unused).empty();
+      shape_ok = parts[p].empty() ? p == 1 && count == 3 : ParseLong(parts[p], &unused).empty();
     }
     if (!shape_ok) return Fail(path, ln, "f: malformed vertex reference " + Quote(ref));
     long long k = 0;
@@ -546,4 +578,8 @@ glm::dvec3 AreaVector(const std::vector<glm::dvec3>& poly) {
   for (size_t i = 0; i < poly.size(); ++i)
     n += glm::cross(poly[i] - centroid, poly[(i + 1) % poly.size()] - centroid);
   return 0.5 * n;
+}
+
+void DropVertices(Scene* scene) {
+  for (Face& f : scene->faces) std::vector<glm::dvec3>().swap(f.verts);
 }

@@ -50,6 +50,11 @@ struct Scene {
 bool LoadScene(const std::string& path, Scene* scene, std::string* err,
                std::vector<std::string>* warnings);
 
+// Frees every face's vertex list and keeps the rest (index, object,
+// material, area, normal): all the master needs of the scene once the mesh
+// is built, the scene hashed and sent (README, Layout: memory).
+void DropVertices(Scene* scene);
+
 // A polygon's normal scaled to its area (Newell's method).
 glm::dvec3 AreaVector(const std::vector<glm::dvec3>& poly);
 

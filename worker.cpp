@@ -15,6 +15,7 @@
 #include "clock.h"
 #include "exit_status.h"
 #include "hemicube.h"
+#include "memory.h"
 #include "mesh.h"
 #include "protocol.h"
 
@@ -206,7 +207,14 @@ int Worker::Run(std::string* err) {
   proto::SceneSetup setup;
   if (type != proto::Msg::kScene || !proto::DecodeScene(payload, &setup, &why))
     return Fail("expected a scene: " + why, err);
-  if (!BuildMesh(setup.scene, setup.mesh, &mesh_, &why)) return Fail(why, err);
+  if (!FitsInMemory(EstimateMesh(setup.scene, setup.mesh).elements, kWorkerBytesPerElement,
+                    UsableMemory(), &why) ||
+      !BuildMesh(setup.scene, setup.mesh, &mesh_, &why))
+    return Fail(why, err);
+  // Only the mesh is needed from here on: the scene and its frame (each
+  // 100-200 bytes a face) are let go rather than kept for the whole run.
+  setup.scene = Scene();
+  std::string().swap(payload);
   frame.clear();
   proto::EncodeReady({mesh_.elems.size(), MeshHash(mesh_)}, &frame);
   if (!out_.Send(frame)) return kExitOk;

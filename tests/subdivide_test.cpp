@@ -80,8 +80,7 @@ TEST(Divide, NeighboursShareMidpointsAndSeeTVertices) {
   Mesh m = Square(2);  // elements 0..3: (0,0) (1,0) (0,1) (1,1)
   const int a = LeafAt(m, {0.25, 0.25, 0}), b = LeafAt(m, {0.75, 0.25, 0});
   Divide(&m, a);
-  const int mid = m.midpoint.at(EdgeKey(std::min(m.elems[a].v[1], m.elems[a].v[2]),
-                                        std::max(m.elems[a].v[1], m.elems[a].v[2])));
+  const int mid = MidpointOf(m, m.elems[a].v[1], m.elems[a].v[2]);
   EXPECT_EQ(m.verts[mid], glm::dvec3(0.5, 0.25, 0));
   int tvs = 0;
   for (int v : m.elems[b].mid) tvs += v == mid;

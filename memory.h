@@ -1,0 +1,28 @@
+// How much memory a run may take, and whether a scene fits in it: a scene
+// that would not fit is refused at load with one line (exit 2) instead of
+// being killed by the kernel half-way (man page, LIMITS).
+//
+// The bytes per element are the peak resident size of a run at about
+// 10^6 elements divided by its elements (bench/memory.sh; README, Layout:
+// memory, says which structures hold them). They are double: estimates.
+#ifndef RADIOSITY_MEMORY_H
+#define RADIOSITY_MEMORY_H
+
+#include <string>
+
+// The master with -j 0: mesh, solver, subdivision's adjacency, the
+// hemicube and the pictures at the end of a wave (measured 620).
+constexpr double kMasterBytesPerElement = 700;
+// A worker: the mesh, its adjacency once divisions come, the hemicube
+// (measured 300).
+constexpr double kWorkerBytesPerElement = 350;
+
+// Bytes this process may still use: physical memory, or less where
+// ulimit -v / -d or a cgroup's memory.max says so.
+double UsableMemory();
+
+// False with *err (one line, no prefix) when `elements` elements at
+// `bytes_per_element` would not fit in `usable` bytes.
+bool FitsInMemory(double elements, double bytes_per_element, double usable, std::string* err);
+
+#endif
