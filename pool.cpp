@@ -310,10 +310,6 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
     if (wk.state == State::kLost) continue;
     if (wk.state != State::kJoined && now - wk.started > opts_.hello_s) {
       Lose(int(w), "did not start within " + std::to_string(int(opts_.hello_s)) + " s", events);
-    } else if (wk.state == State::kJoined && now - wk.last_heard > opts_.timeout_s) {
-      char buf[80];
-      std::snprintf(buf, sizeof buf, "silent for %.1f s", now - wk.last_heard);
-      Lose(int(w), buf, events);
     } else if (wk.state == State::kJoined && wk.out.empty() &&
                now - wk.last_sent > opts_.heartbeat_s) {
       proto::EncodeHeartbeat(&wk.out);
@@ -353,12 +349,17 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
     for (size_t i = nworkers; i < fds.size(); ++i)
       if (fds[i].revents) sources_[i - nworkers]->Take(this);
   }
-  // Progress is judged after reading, so that a column that came while
-  // the master was busy elsewhere (a picture, a division pass) counts.
+  // Silence and progress are judged after reading, so that a heartbeat or
+  // a column that came while the master was busy elsewhere (a picture, a
+  // division pass over a million elements) counts.
   now = Clk();
   for (size_t w = 0; w < workers_.size(); ++w) {
     const Worker& wk = workers_[w];
-    if (wk.state == State::kJoined && wk.owed > 0 && now - wk.progress > opts_.timeout_s) {
+    if (wk.state == State::kJoined && now - wk.last_heard > opts_.timeout_s) {
+      char buf[80];
+      std::snprintf(buf, sizeof buf, "silent for %.1f s", now - wk.last_heard);
+      Lose(int(w), buf, events);
+    } else if (wk.state == State::kJoined && wk.owed > 0 && now - wk.progress > opts_.timeout_s) {
       char buf[96];
       std::snprintf(buf, sizeof buf, "no column in %.1f s though given work (heartbeats only)",
                     now - wk.progress);

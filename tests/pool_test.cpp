@@ -189,6 +189,18 @@ TEST_F(PoolTest, HeartbeatsAfterSilenceAndTimeoutWithout) {
   EXPECT_EQ(LostWhy(), "silent for 10.5 s");
 }
 
+// A master busy for longer than the timeout (a division pass over a
+// million elements) judges silence by what is waiting when it comes back:
+// the heartbeats sent meanwhile count, the worker stays.
+TEST_F(PoolTest, HeartbeatsThatArrivedWhileTheMasterWasBusyCount) {
+  Peer p = Joined();
+  p.SendHeartbeat();  // sent during the busy spell, read only after it
+  clock_.now += 2 * opts_.timeout_s;
+  EXPECT_TRUE(Events().empty());
+  clock_.now += opts_.timeout_s + 0.5;  // then really silent
+  EXPECT_EQ(LostWhy(), "silent for 10.5 s");
+}
+
 // Heartbeats alone do not keep a worker that was given work: with no
 // column for --timeout it is dropped (its patches then go to the others,
 // as for any lost worker); one that answers, or has nothing to do, stays.
