@@ -185,14 +185,14 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     const double f = double(col[i].f);
     if (q >= 0) {
       b_[e] += xa * (f * rho_per_area_[e]);
-      Changed(e);
+      if (track_) Changed(e);
     } else {  // divided since the column was computed: each leaf gains alike
       q = ~q;
       mesh_.LeavesUnder(e, &leaves_);
       const glm::dvec3 gain = xa * (f * rho_per_area_[e]);
       for (int l : leaves_) {
         b_[l] += gain;
-        Changed(l);
+        if (track_) Changed(l);
       }
     }
     if (fsum_[q] == 0) touched_.push_back(q);
@@ -224,6 +224,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
 }
 
 void Solver::TakeChanged(std::vector<int32_t>* out) {
+  track_ = true;
   out->swap(changed_);
   changed_.clear();
   for (int32_t e : *out) is_changed_[size_t(e)] = 0;
@@ -234,7 +235,7 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
   for (int32_t p : elems)
     for (int k = 0; k < kChildren; ++k) {
       b_[mesh_.elems[p].first_child + k] = b_[p];
-      Changed(mesh_.elems[p].first_child + k);
+      if (track_) Changed(mesh_.elems[p].first_child + k);
     }
   // Fitted to the values as they are now (elements divided in this pass
   // hold their parent's), so the order of `elems` does not matter.

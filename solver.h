@@ -61,7 +61,9 @@ class Solver {
 
   // The elements whose radiosity changed since the last call (each once;
   // those Divided() made included), into *out: what a division pass needs
-  // to look at again (Subdivider::Pass).
+  // to look at again (Subdivider::Pass). Kept only from the first call on,
+  // so that a run without subdivision does not pay for it in Shoot (a
+  // wave's first pass evaluates every leaf and needs no list).
   void TakeChanged(std::vector<int32_t>* out);
 
   // Divide() was applied to the mesh for these elements (in this order):
@@ -117,6 +119,7 @@ class Solver {
   std::vector<int32_t> touched_;    // patches with fsum_ != 0
   std::vector<uint8_t> is_changed_; // per element: in changed_
   std::vector<int32_t> changed_;    // elements whose B changed, for TakeChanged
+  bool track_ = false;              // since TakeChanged was first called
   std::vector<uint8_t> lit_;        // per patch: emits, or light reached it
   std::vector<uint8_t> blind_;      // per patch: its column was empty
   std::vector<int> times_shot_;
