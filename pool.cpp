@@ -142,7 +142,6 @@ void WorkerPool::Add(std::unique_ptr<Conn> conn, const std::string& name) {
   w.name = name;
   w.conn = std::move(conn);
   w.started = w.last_heard = w.last_sent = Clk();
-  w.out = scene_frame_;
   // A worker that joins late (or replaces a lost one) gets the hierarchy
   // as it is now: every edit so far, in order, right after the scene.
   if (!edits_.empty()) proto::EncodeDivide(edits_, &w.out);
@@ -186,14 +185,17 @@ void WorkerPool::Lose(int w, const std::string& why, std::vector<WorkerEvent>* e
 
 void WorkerPool::Flush(int w, std::vector<WorkerEvent>* events) {
   Worker& wk = workers_[w];
-  while (wk.state != State::kLost && wk.out_pos < wk.out.size()) {
-    long n = wk.conn->Write(wk.out.data() + wk.out_pos, wk.out.size() - wk.out_pos);
+  while (wk.state != State::kLost && wk.Writing(scene_frame_.size())) {
+    const bool scene = wk.scene_sent < scene_frame_.size();
+    long n = scene ? wk.conn->Write(scene_frame_.data() + wk.scene_sent,
+                                    scene_frame_.size() - wk.scene_sent)
+                   : wk.conn->Write(wk.out.data() + wk.out_pos, wk.out.size() - wk.out_pos);
     if (n < 0 && IsAgain()) break;
     if (n <= 0) {
       Lose(w, std::string("cannot send: ") + std::strerror(errno), events);
       return;
     }
-    wk.out_pos += size_t(n);
+    (scene ? wk.scene_sent : wk.out_pos) += size_t(n);
     sent_ += uint64_t(n);
     wk.last_sent = Clk();
   }
@@ -328,7 +330,7 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
   for (size_t w = 0; w < workers_.size(); ++w) {
     Worker& wk = workers_[w];
     if (wk.state == State::kLost) continue;
-    fds.push_back({wk.conn->fd(), wk.conn->Events(wk.out_pos < wk.out.size()), 0});
+    fds.push_back({wk.conn->fd(), wk.conn->Events(wk.Writing(scene_frame_.size())), 0});
     who.push_back(int(w));
   }
   const size_t nworkers = fds.size();

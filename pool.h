@@ -119,8 +119,13 @@ class WorkerPool : public Transport {
     std::unique_ptr<Conn> conn;
     State state = State::kHello;
     proto::FrameReader in;
+    // The hello and scene frame are sent from scene_frame_ itself (a copy
+    // per worker was the scene's size times the workers on the master),
+    // then what is queued in `out`.
+    size_t scene_sent = 0;  // bytes of scene_frame_ written
     std::string out;        // encoded frames not yet written
     size_t out_pos = 0;
+    bool Writing(size_t scene) const { return scene_sent < scene || out_pos < out.size(); }
     double last_heard = 0, last_sent = 0, started = 0;
     // Patches given and not answered with a column, and when the last
     // column came (or the first of them was given): heartbeats say a

@@ -276,15 +276,29 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   }
   std::vector<int>().swap(first);
   std::vector<int>().swap(face_of);
-  std::vector<glm::dvec3> gsum(static_cast<size_t>(groups), glm::dvec3(0.0));
-  std::vector<double> gw(static_cast<size_t>(groups), 0.0);
-  for (size_t v = 0; v < sum.size(); ++v) {
-    gsum[group[v]] += sum[v];
-    gw[group[v]] += w[v];
-  }
-  s.colors.resize(mesh.verts.size(), glm::vec3(0.0f));
+  // Most groups are one vertex, whose sums are its own (0 + x is x): sums
+  // per group only for those joined (a group's members, then the index of
+  // its sums or -1).
+  std::vector<int> joined(static_cast<size_t>(groups), 0);
+  for (int g : group) ++joined[g];
+  size_t njoined = 0;
+  for (int& j : joined) j = j > 1 ? int(njoined++) : -1;
+  std::vector<glm::dvec3> gsum(njoined, glm::dvec3(0.0));
+  std::vector<double> gw(njoined, 0.0);
   for (size_t v = 0; v < sum.size(); ++v)
-    if (gw[group[v]] > 0) s.colors[v] = glm::vec3(gsum[group[v]] / gw[group[v]]);
+    if (const int j = joined[group[v]]; j >= 0) {
+      gsum[j] += sum[v];
+      gw[j] += w[v];
+    }
+  s.colors.resize(mesh.verts.size(), glm::vec3(0.0f));
+  for (size_t v = 0; v < sum.size(); ++v) {
+    const int j = joined[group[v]];
+    const double weight = j >= 0 ? gw[j] : w[v];
+    if (weight > 0) s.colors[v] = glm::vec3((j >= 0 ? gsum[j] : sum[v]) / weight);
+  }
+  for (auto* x : {&sum, &gsum}) std::vector<glm::dvec3>().swap(*x);
+  for (auto* x : {&w, &gw}) std::vector<double>().swap(*x);
+  std::vector<int>().swap(joined);
   // A T-vertex takes the value interpolated along the coarser edge it lies
   // on, so both sides shade that edge alike (no seam); so do the vertices
   // joined with it across coplanar faces. Coarser first: a corner of a
