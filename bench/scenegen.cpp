@@ -133,7 +133,7 @@ int Boxes(int n, const std::string& out, unsigned seed) {
   obj.Line("o light");
   obj.Line("usemtl light");
   const double l0 = 4, l1 = 6, ly = H - 0.001;
-  obj.Polygon({{l0, ly, l0}, {l0, ly, l1}, {l1, ly, l1}, {l1, ly, l0}});
+  obj.Polygon({{l0, ly, l0}, {l1, ly, l0}, {l1, ly, l1}, {l0, ly, l1}});  // facing down
   // A square grid of cells over the floor, one box in each, filled row by row.
   int side = int(std::ceil(std::sqrt(double(n))));
   double cell = (W - 1.0) / std::max(side, 1);
