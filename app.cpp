@@ -93,8 +93,10 @@ void MasterRun::Build() {
 
   if (!BuildMesh(scene_, opts_.mesh, &mesh_, &err)) Die(kExitUsage, opts_.scene_path + ": " + err);
   if (opts_.verbosity >= 2)
-    std::fprintf(stderr, "radiosity: %zu faces, %zu patches, %zu elements (patch size %g)\n",
-                 scene_.faces.size(), mesh_.patches.size(), mesh_.elems.size(), mesh_.patch_size);
+    std::fprintf(stderr,
+                 "radiosity: %zu faces, %zu surfaces, %zu patches, %zu elements (patch size %g)\n",
+                 scene_.faces.size(), mesh_.faces.size(), mesh_.patches.size(), mesh_.elems.size(),
+                 mesh_.patch_size);
 
   // A checkpoint to resume is checked before anything is started; one to
   // write must be writable before the run starts.
