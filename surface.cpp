@@ -53,8 +53,16 @@ class Joiner {
   std::vector<Surface> Run() {
     Weld();
     Group();
-    for (size_t f = 0; f < group_.size(); ++f)
-      if (Find(int(f)) == int(f) && group_size_[f] > 1) Whole(int(f));
+    // Each group's faces in a row, in face order (a counting sort by root).
+    const size_t n = group_.size();
+    std::vector<int> begin(n + 1, 0), members(n);
+    for (size_t f = 0; f < n; ++f) ++begin[size_t(Find(int(f))) + 1];
+    for (size_t r = 0; r < n; ++r) begin[r + 1] += begin[r];
+    std::vector<int> fill(begin.begin(), begin.end() - 1);
+    for (size_t f = 0; f < n; ++f) members[size_t(fill[size_t(Find(int(f)))]++)] = int(f);
+    for (size_t r = 0; r < n; ++r)
+      if (begin[r + 1] - begin[r] > 1)
+        Whole(std::vector<int>(members.begin() + begin[r], members.begin() + begin[r + 1]));
     while (Pass()) {}
     std::vector<Surface> out;
     for (size_t i = 0; i < pieces_.size(); ++i)
@@ -131,17 +139,13 @@ class Joiner {
       const int a = Find(f), b = Find(g);
       if (a != b) group_[std::max(a, b)] = std::min(a, b);
     }
-    group_size_.assign(group_.size(), 0);
-    for (size_t f = 0; f < group_.size(); ++f) ++group_size_[Find(int(f))];
   }
 
   // A group whose outline is one loop, convex and within the tolerance of
   // its plane, becomes one piece at once (a wall cut into triangles, a fan
   // of an n-gon): the pairwise joins below could stop short of it.
-  void Whole(int root) {
-    std::vector<int> members;
-    for (size_t f = size_t(root); f < group_.size(); ++f)
-      if (Find(int(f)) == root) members.push_back(int(f));
+  void Whole(const std::vector<int>& members) {
+    const int root = members[0];
     std::unordered_map<int, int> next;  // the outline's directed edges
     size_t edges = 0;
     int start = -1;
@@ -349,7 +353,6 @@ class Joiner {
   std::vector<Piece> pieces_;
   std::vector<int> piece_of_;   // face -> the piece it is in
   std::vector<int> group_;      // union-find parent of each face (Group)
-  std::vector<int> group_size_; // faces in the group, at its root
   std::vector<std::pair<uint64_t, int>> edges_;  // directed edge -> face, sorted
   std::unordered_set<std::array<int, 4>, KeyHash> failed_;  // pairs tried as they are
 };
