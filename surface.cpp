@@ -234,7 +234,6 @@ class Joiner {
     pairs.resize(w);
     std::stable_sort(pairs.begin(), pairs.end(),
                      [](const Pair& x, const Pair& y) { return x.shared > y.shared; });
-    std::vector<int> touched;
     bool any = false;
     for (const Pair& pr : pairs) {
       Piece &p = pieces_[pr.a], &q = pieces_[pr.b];
