@@ -123,6 +123,31 @@ TEST(Surface, NearCoplanarFacesThatMustStayApart) {
   for (const Surface& s : l) EXPECT_NEAR(glm::length(AreaVector(s.poly)), s.area, 1e-12);
 }
 
+// A ceiling cut into 8 squares round a hole: a few convex pieces that
+// cover it all.
+TEST(Surface, SurfaceWithAHoleBecomesAFewConvexPieces) {
+  Scene s = EmptyScene();
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i)
+      if (i != 1 || j != 1) Add(&s, {{i, j, 0}, {i + 1, j, 0}, {i + 1, j + 1, 0}, {i, j + 1, 0}}, 0);
+  const std::vector<Surface> out = BuildSurfaces(s, true);
+  EXPECT_LE(out.size(), 4u);
+  double area = 0;
+  size_t faces = 0;
+  for (const Surface& p : out) {
+    const size_t n = p.poly.size();
+    for (size_t k = 0; k < n; ++k) {
+      const glm::dvec3 a = p.poly[k], b = p.poly[(k + 1) % n], c = p.poly[(k + 2) % n];
+      EXPECT_GT(glm::dot(glm::cross(b - a, c - b), p.normal), 0) << "convex, no straight corner";
+    }
+    EXPECT_NEAR(glm::length(AreaVector(p.poly)), p.area, 1e-12);
+    area += p.area;
+    faces += p.faces.size();
+  }
+  EXPECT_EQ(faces, 8u);
+  EXPECT_NEAR(area, 8.0, 1e-12);
+}
+
 // 7 significant digits, as many exporters print.
 double Digits7(double x) {
   char buf[32];
