@@ -3,7 +3,7 @@
 # room as shipped and as an exporter writes them, tessellated and
 # triangulated (build/scenegen tessellate IN K OUT --tri), each solved with
 # the defaults and -j $JOBS. Prints a Markdown table: faces, surfaces,
-# patches and elements as built, shots, seconds, and the per-face
+# patches and elements as built, elements at the end, shots, seconds, and the per-face
 # difference from the untessellated scene solved by the same program (the
 # pieces folded back onto its faces, area-weighted; per face and channel
 # relative to B, faces darker than 1% of the mean compared against that
@@ -35,8 +35,8 @@ diff_csv() {
       printf "%.3f%% | %.3f%%", 100 * worst, 100 * sqrt(se / sw) }' "$1" "$2"
 }
 
-echo "| program | scene | faces | surfaces | patches | elements | shots | seconds | per-face diff max | RMS |"
-echo "|---|---|---|---|---|---|---|---|---|---|"
+echo "| program | scene | faces | surfaces | patches | elements | at the end | shots | seconds | per-face diff max | RMS |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
 for prog in ./radiosity ${BEFORE:-}; do
   name=$([ "$prog" = ./radiosity ] && echo this || echo before)
   for s in cornell cornell-t blender blender-t; do
@@ -51,7 +51,7 @@ for prog in ./radiosity ${BEFORE:-}; do
     # "N faces, [N surfaces,] N patches, N elements": the build before surfaces has no surfaces.
     set -- $(sed -n 's/^radiosity: \([0-9]*\) faces, \(\([0-9]*\) surfaces, \)\{0,1\}\([0-9]*\) patches, \([0-9]*\) elements.*/\1 \3x \4 \5/p' "$out.err")
     faces=$1 surf=${2%x} patches=$3 elems=$4
-    shots=$(tail -1 "$out/log.csv" | cut -d, -f2)
+    shots=$(tail -1 "$out/log.csv" | cut -d, -f2) end=$(tail -1 "$out/log.csv" | cut -d, -f4)
     case $s in
       cornell-t) awk -v k="$KC" -v tri=1 -f tests/fold.awk scenes/cornell.obj "$out/result.csv" >"$out.csv"
                  d=$(diff_csv "$out.csv" "$T/$name-cornell/result.csv") ;;
@@ -59,6 +59,6 @@ for prog in ./radiosity ${BEFORE:-}; do
                  d=$(diff_csv "$out.csv" "$T/$name-blender/result.csv") ;;
       *) d="- | -" ;;
     esac
-    echo "| $name | $s | $faces | ${surf:-(faces)} | $patches | $elems | $shots | $secs | $d |"
+    echo "| $name | $s | $faces | ${surf:-(faces)} | $patches | $elems | $end | $shots | $secs | $d |"
   done
 done
