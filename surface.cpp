@@ -74,6 +74,7 @@ class Joiner {
   void Weld() {
     const size_t n = scene_.faces.size();
     std::unordered_map<glm::dvec3, int, PointHash> ids;
+    std::vector<uint64_t> used;  // every face's edges, undirected
     pieces_.resize(n);
     piece_of_.resize(n);
     for (size_t f = 0; f < n; ++f) {
@@ -94,6 +95,10 @@ class Joiner {
       }
       p.moment = face.area * (c / double(face.verts.size()));
       piece_of_[f] = int(f);
+      for (size_t k = 0, m = p.loop.size(); k < m; ++k) {
+        const int a = p.loop[k], b = p.loop[(k + 1) % m];
+        used.push_back(a < b ? EdgeKey(a, b) : EdgeKey(b, a));
+      }
       // Only convex faces join: the pieces must stay convex.
       const double tol = Tolerance(p.lo, p.hi);
       bool convex = true;
@@ -105,6 +110,18 @@ class Joiner {
       for (size_t k = 0; k < m; ++k)
         edges_.push_back({EdgeKey(p.loop[k], p.loop[(k + 1) % m]), int(f)});
     }
+    // An edge of more than two faces has something standing on it (a wall
+    // on the line where a floor was cut): no join across it, or elements
+    // would reach from one side of the wall to the other.
+    std::sort(used.begin(), used.end());
+    edges_.erase(std::remove_if(edges_.begin(), edges_.end(),
+                                [&](const std::pair<uint64_t, int>& e) {
+                                  const int a = int(e.first >> 32), b = int(uint32_t(e.first));
+                                  const auto r = std::equal_range(
+                                      used.begin(), used.end(), a < b ? e.first : EdgeKey(b, a));
+                                  return r.second - r.first > 2;
+                                }),
+                 edges_.end());
     std::sort(edges_.begin(), edges_.end());
   }
 

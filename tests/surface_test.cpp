@@ -114,6 +114,11 @@ TEST(Surface, NearCoplanarFacesThatMustStayApart) {
   Add(&corner, {{1, 1, 0}, {2, 1, 0}, {2, 2, 0}, {1, 2, 0}}, 0);
   EXPECT_EQ(surfaces(corner), 2u);
 
+  // A wall standing on the edge where the floor was cut.
+  Scene wall = pair(0);
+  Add(&wall, {{1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}}, 0);
+  EXPECT_EQ(surfaces(wall), 3u);
+
   // An L of three squares is not convex: two surfaces, all of its area.
   Scene ell = corner;
   Add(&ell, {{1, 0, 0}, {2, 0, 0}, {2, 1, 0}, {1, 1, 0}}, 0);
