@@ -49,6 +49,7 @@ for prog in ./radiosity ${BEFORE:-}; do
     "$prog" -v -j "$JOBS" -o "$out" "$obj" 2>"$out.err" >/dev/null || { echo "$prog $obj failed" >&2; exit 1; }
     secs=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.2f", b - a }')
     # "N faces, [N surfaces,] N patches, N elements": the build before surfaces has no surfaces.
+    # shellcheck disable=SC2046 # the four numbers, split on purpose
     set -- $(sed -n 's/^radiosity: \([0-9]*\) faces, \(\([0-9]*\) surfaces, \)\{0,1\}\([0-9]*\) patches, \([0-9]*\) elements.*/\1 \3x \4 \5/p' "$out.err")
     faces=$1 surf=${2%x} patches=$3 elems=$4
     shots=$(tail -1 "$out/log.csv" | cut -d, -f2) end=$(tail -1 "$out/log.csv" | cut -d, -f4)
