@@ -167,10 +167,10 @@ void MasterRun::Build() {
   const double t2 = MonotonicSeconds();
   if (opts_.verbosity >= 2)
     std::fprintf(stderr,
-                 "radiosity: %zu faces, %zu patches, %zu elements (patch size %g); "
+                 "radiosity: %zu faces, %zu surfaces, %zu patches, %zu elements (patch size %g); "
                  "loaded in %.2f s, meshed in %.2f s\n",
-                 scene_.faces.size(), mesh_.patches.size(), mesh_.elems.size(), mesh_.patch_size,
-                 t1 - t0, t2 - t1);
+                 scene_.faces.size(), mesh_.faces.size(), mesh_.patches.size(), mesh_.elems.size(),
+                 mesh_.patch_size, t1 - t0, t2 - t1);
 
   // A checkpoint to resume is checked before anything is started; one to
   // write must be writable before the run starts.

@@ -242,7 +242,7 @@ bool CheckIdentity(const Checkpoint& c, const RunIdentity& id, std::string* err)
     return false;
   }
   if (c.base_hash != id.base_hash || c.base_elements != id.base_elements) {
-    *err = "made by a build that meshes this scene differently (" +
+    *err = "made by a build or with a --no-join that meshes this scene differently (" +
            std::to_string(c.base_elements) + " elements, this one " +
            std::to_string(id.base_elements) + ")";
     return false;

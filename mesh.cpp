@@ -8,6 +8,7 @@
 
 #include "check.h"
 #include "hash.h"
+#include "surface.h"
 
 namespace {
 
@@ -225,20 +226,30 @@ int Cuts(double length, double size) {
 
 }  // namespace
 
-MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts) {
+namespace {
+
+MeshEstimate Estimate(const std::vector<Surface>& surfaces, double ps, int epp) {
   MeshEstimate m;
-  const double ps =
-      opts.patch_size > 0 ? opts.patch_size : glm::length(scene.hi - scene.lo) / 16;
-  if (!(ps > 0)) return m;
-  for (const Face& f : scene.faces) {
+  for (const Surface& f : surfaces) {
     double ext = 0;
-    for (const auto& p : f.verts) ext = std::max(ext, glm::length(p - f.verts[0]));
-    double n = std::ceil(ext / ps) * opts.elements_per_patch;
-    const double pieces = f.verts.size() > 4 ? double(f.verts.size() - 2) : 1.0;
+    for (const auto& p : f.poly) ext = std::max(ext, glm::length(p - f.poly[0]));
+    double n = std::ceil(ext / ps) * epp;
+    const double pieces = f.poly.size() > 4 ? double(f.poly.size() - 2) : 1.0;
     m.elements += n * n * pieces;
     m.vertices += (n + 1) * (n + 1) * pieces;
   }
   return m;
+}
+
+}  // namespace
+
+// From the surfaces, as BuildMesh will cut them: a floor of 10^6
+// triangles is one quad's elements, not 10^6 faces' worth.
+MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts) {
+  const double ps =
+      opts.patch_size > 0 ? opts.patch_size : glm::length(scene.hi - scene.lo) / 16;
+  if (!(ps > 0)) return MeshEstimate();
+  return Estimate(BuildSurfaces(scene, opts.join), ps, opts.elements_per_patch);
 }
 
 bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
@@ -253,15 +264,17 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
   const double ps = mesh->patch_size;
   const int epp = opts.elements_per_patch;
 
+  const std::vector<Surface> surfaces = BuildSurfaces(scene, opts.join);
+
   // Count first so an absurd patch size is refused before allocating.
-  const MeshEstimate size = EstimateMesh(scene, opts);
+  const MeshEstimate size = Estimate(surfaces, ps, epp);
   const double estimate = size.elements, vertices = size.vertices;
   if (estimate > kMaxElements) {
-    char buf[160];
+    char buf[200];
     std::snprintf(buf, sizeof buf,
-                  "%zu faces at patch size %g and %d elements per patch edge would make "
-                  "about %.3g elements (limit %d)",
-                  scene.faces.size(), ps, epp, estimate, kMaxElements);
+                  "%zu faces (%zu surfaces) at patch size %g and %d elements per patch edge "
+                  "would make about %.3g elements (limit %d)",
+                  scene.faces.size(), surfaces.size(), ps, epp, estimate, kMaxElements);
     *err = buf;
     return false;
   }
@@ -269,29 +282,40 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
   // Reserved from the estimates (at most a few times too much; pages never
   // written cost no memory): growing by doubling wrote every array two or
   // three times over, most of BuildMesh's time at 10^6 faces.
-  mesh->faces.reserve(scene.faces.size());
+  mesh->faces.reserve(surfaces.size());
   mesh->elems.reserve(size_t(estimate));
   mesh->verts.reserve(size_t(vertices));
-  mesh->patches.reserve(size_t(estimate) / size_t(epp * epp) + scene.faces.size());
+  mesh->patches.reserve(size_t(estimate) / size_t(epp * epp) + surfaces.size());
+  mesh->corner_begin.assign(scene.faces.size() + 1, 0);
+  for (const Surface& f : surfaces) {
+    if (f.faces.size() > 1)
+      for (int i : f.faces) mesh->corner_begin[i + 1] = int(scene.faces[i].verts.size());
+  }
+  for (size_t i = 0; i < scene.faces.size(); ++i) {
+    if (mesh->corner_begin[i + 1] > 0)
+      mesh->face_corners.insert(mesh->face_corners.end(), scene.faces[i].verts.begin(),
+                                scene.faces[i].verts.end());
+    mesh->corner_begin[i + 1] += mesh->corner_begin[i];
+  }
+
   FaceVerts fv(&mesh->verts);
-  for (size_t fi = 0; fi < scene.faces.size(); ++fi) {
-    const Face& f = scene.faces[fi];
+  for (const Surface& f : surfaces) {
     const Material& mat = scene.materials[f.material];
     MeshFace mf;
-    mf.scene_face = int(fi);
+    mf.scene_faces = f.faces;
     mf.normal = f.normal;
     mf.rho = mat.kd;
     mf.emission = mat.ke;
     mf.material = f.material;
     mf.area = f.area;
-    mf.offset = glm::dot(f.normal, f.verts[0]);
+    mf.offset = f.offset;
     int face = int(mesh->faces.size());
-    mesh->faces.push_back(mf);
+    mesh->faces.push_back(std::move(mf));
 
     mesh->faces[face].vbegin = int(mesh->verts.size());
     fv.NextFace();
     Builder b{mesh, face, epp, &fv, {}};
-    const auto& v = f.verts;
+    const auto& v = f.poly;
     if (v.size() == 3) {
       double e = std::max({glm::length(v[1] - v[0]), glm::length(v[2] - v[1]),
                            glm::length(v[0] - v[2])});

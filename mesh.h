@@ -1,10 +1,13 @@
 // The patch -> element hierarchy built from the scene's faces.
 //
-// Each input face is cut into patches (the shooters) of at most
+// The input faces are joined into surfaces (surface.h): adjacent coplanar
+// faces of one material become one convex polygon. Each surface (a
+// MeshFace) is cut into patches (the shooters) of at most
 // MeshOptions::patch_size across, and each patch into elements (the
-// receivers). Elements are convex planar triangles or quads; vertices are
-// shared inside one input face (for Gouraud shading and gap-free hemicube
-// rasterisation) but never across faces, so that shading does not bleed
+// receivers), which may cover parts of several input faces. Elements are
+// convex planar triangles or quads; vertices are shared inside one
+// surface (for Gouraud shading and gap-free hemicube rasterisation) but
+// never across surfaces, so that shading does not bleed
 // round corners. Grid points on a face's edge are computed from the edge's
 // endpoints in a canonical order, so two faces cut the same way along a
 // common edge produce bit-identical points and the hemicube sees no cracks.
@@ -55,8 +58,10 @@ struct Patch {
   glm::dvec3 center{0.0};        // area centroid: where the hemicube sits
 };
 
+// A surface (surface.h): one input face, or adjacent coplanar faces of
+// one material joined into a convex polygon.
 struct MeshFace {
-  int scene_face = -1;           // index into Scene::faces
+  std::vector<int> scene_faces;  // the Scene::faces it covers, ascending
   glm::dvec3 normal{0.0};
   glm::dvec3 rho{0.0};           // Kd
   glm::dvec3 emission{0.0};      // Ke
@@ -83,6 +88,9 @@ struct MeshOptions {
   double patch_size = 0.0;
   // Elements per patch edge (a patch becomes n x n elements).
   int elements_per_patch = 2;
+  // Join adjacent coplanar faces of one material into surfaces before
+  // cutting (surface.h; --no-join turns it off).
+  bool join = true;
 };
 
 struct Mesh {
@@ -92,6 +100,13 @@ struct Mesh {
   std::vector<MeshFace> faces;
   double patch_size = 0.0;     // as used
   double scene_diagonal = 0.0; // bounding-box diagonal, the scene's scale
+  // The corners of the input faces that joined into larger surfaces, for
+  // their results (FaceRadiosity weighs each leaf by its overlap with the
+  // face): scene face f's are face_corners[corner_begin[f], corner_begin[f + 1]),
+  // empty for a face that is a surface alone. corner_begin has a row per
+  // scene face and one more.
+  std::vector<glm::dvec3> face_corners;
+  std::vector<int> corner_begin;
 
   // Adjacency for Divide() and LeafNeighbours(), made by ConnectEdges()
   // and kept by Divide(): flat arrays indexed by vertex or by edge slot

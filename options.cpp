@@ -111,6 +111,8 @@ const char kUsage[] =
     "                         as CSV, a reference for --reference\n"
     "      --patch-size L     largest patch edge (default: scene diagonal / 16)\n"
     "      --elements N       elements per patch edge (default 2)\n"
+    "      --no-join          cut every face on its own (default: join coplanar faces\n"
+    "                         of one material into surfaces)\n"
     "      --no-subdivide     keep the mesh as built (default: divide where light changes)\n"
     "      --no-waves         one wave: never restart on the finer mesh\n"
     "      --subdivide-floor F  lowest dividing-factor threshold (default 0.2)\n"
@@ -140,7 +142,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   enum {
     kNoOvershoot = 256, kReference, kPatchSize, kElements, kNoRotate, kSeed,
     kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
-    kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
+    kNoJoin, kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
     kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect, kConverge,
     kCheckpoint, kCheckpointEvery, kResume,
   };
@@ -166,6 +168,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       {"converge", required_argument, nullptr, kConverge},
       {"patch-size", required_argument, nullptr, kPatchSize},
       {"elements", required_argument, nullptr, kElements},
+      {"no-join", no_argument, nullptr, kNoJoin},
       {"no-subdivide", no_argument, nullptr, kNoSubdivide},
       {"no-waves", no_argument, nullptr, kNoWaves},
       {"subdivide-floor", required_argument, nullptr, kFloor},
@@ -244,6 +247,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       case kElements:
         ok = Integer("--elements", optarg, 1, 64, &o.mesh.elements_per_patch, err);
         break;
+      case kNoJoin: o.mesh.join = false; break;
       case kNoSubdivide: o.subdivide = false; no_subdivide = true; break;
       case kNoWaves: o.sub.waves = false; no_waves = true; break;
       case kFloor:

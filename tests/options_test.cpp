@@ -73,6 +73,7 @@ TEST(Options, Defaults) {
   EXPECT_EQ(o.run.log_every, 0);
   EXPECT_EQ(o.mesh.patch_size, 0);
   EXPECT_EQ(o.mesh.elements_per_patch, 2);
+  EXPECT_TRUE(o.mesh.join);
   EXPECT_TRUE(o.subdivide);
   EXPECT_TRUE(o.sub.waves);
   EXPECT_EQ(o.sub.floor, 0.2);
@@ -94,7 +95,7 @@ TEST(Options, EveryValueOption) {
   const Options o = Parses({"-o", "res", "-j", "3", "--queue", "7", "--timeout", "2.5",
                          "--worker-cmd", "valgrind radiosity", "-r", "64", "-e", "1e-4", "-s",
                          "500", "-t", "12.5", "--no-overshoot", "--reference", "ref.csv",
-                         "--patch-size", "0.25", "--elements", "3",
+                         "--patch-size", "0.25", "--elements", "3", "--no-join",
                          "--subdivide-floor", "0.3", "--min-element", "0.01",
                          "--max-level", "5", "--wave-fraction", "0.5", "--no-rotate", "--seed",
                          "42", "--log-every", "9", "--checkpoint", "ck", "--checkpoint-every",
@@ -117,6 +118,7 @@ TEST(Options, EveryValueOption) {
   // (--no-subdivide and --no-waves contradict the limits: on their own)
   EXPECT_FALSE(Parses({"--no-subdivide", "s.obj"}).subdivide);
   EXPECT_FALSE(Parses({"--no-waves", "s.obj"}).sub.waves);
+  EXPECT_FALSE(o.mesh.join);
   EXPECT_EQ(o.sub.floor, 0.3);
   EXPECT_EQ(o.sub.min_size, 0.01);
   EXPECT_EQ(o.sub.max_level, 5);

@@ -35,6 +35,7 @@ std::string RawScene(const proto::SceneSetup& m) {
   WLE(&s, m.seed, 4);
   WVar(&s, uint32_t(m.mesh.elements_per_patch));
   WF64(&s, m.mesh.patch_size);
+  s += char(m.mesh.join);
   WF64(&s, m.heartbeat_s);
   WVec(&s, m.scene.lo);
   WVec(&s, m.scene.hi);
@@ -153,7 +154,7 @@ TEST(Protocol, HelloRoundTrips) {
     std::string frame;
     proto::EncodeHello(h, &frame);
     const std::string p = PayloadOf(frame, Msg::kHello);
-    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x02\x00", 6));  // magic, version
+    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x03\x00", 6));  // magic, version
     proto::Hello d;
     d.magic = 0;
     d.version = 0;
@@ -164,7 +165,7 @@ TEST(Protocol, HelloRoundTrips) {
     EXPECT_EQ(d.build, b);
   }
   // A build string longer than 256 bytes or not printable is refused.
-  std::string p = "RADW" + std::string("\x02\x00", 2);
+  std::string p = "RADW" + std::string("\x03\x00", 2);
   std::string long_build = p;
   WVar(&long_build, 257);
   long_build += std::string(257, 'x');
@@ -216,6 +217,7 @@ TEST(Protocol, SceneRoundTripsBitForBitAndRebuildsTheSameMesh) {
   EXPECT_EQ(Bits(d.heartbeat_s), Bits(m.heartbeat_s));
   EXPECT_EQ(Bits(d.mesh.patch_size), Bits(m.mesh.patch_size));
   EXPECT_EQ(d.mesh.elements_per_patch, m.mesh.elements_per_patch);
+  EXPECT_EQ(d.mesh.join, m.mesh.join);
   for (int k = 0; k < 3; ++k) {
     EXPECT_EQ(Bits(d.scene.lo[k]), Bits(m.scene.lo[k]));
     EXPECT_EQ(Bits(d.scene.hi[k]), Bits(m.scene.hi[k]));
@@ -488,7 +490,7 @@ TEST(Protocol, HugeCountsFailFastWithoutAllocating) {
     sc += std::string(10, '\0');
     EXPECT_FALSE(proto::DecodeScene(sc, &d, &err));
     EXPECT_NE(err.find("face count"), std::string::npos) << err;
-    std::string mats = sc.substr(0, 72);  // fixed fields, then the material count
+    std::string mats = sc.substr(0, 73);  // fixed fields, then the material count
     WVar(&mats, n);
     EXPECT_FALSE(proto::DecodeScene(mats, &d, &err));
     EXPECT_NE(err.find("material count"), std::string::npos) << err;
