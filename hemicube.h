@@ -69,8 +69,9 @@ class Hemicube {
 
  private:
   // The mesh as the column reads it, rebuilt when the mesh changes (built,
-  // divided, replaced): flat, in the order it is read, with each face's
-  // vertices and leaves contiguous and every leaf's outline precomputed.
+  // divided, replaced; Key): flat, in the order it is read, each face's
+  // leaves contiguous with their outlines precomputed. About 30 bytes an
+  // element and 160 a face, the per-element sums included.
   struct CacheFace {
     glm::dvec3 normal{0.0};
     double offset = 0;
