@@ -7,7 +7,7 @@
 // moves, and with it every patch's power at once). So the tree does not
 // hold the powers but an upper bound of each as of a reference point of
 // the shared term, and the owner says how far any power may have moved
-// since (`drift`, one number for all). Best() then visits only the
+// since (`drift`, one number for all, times a weight per shooter). Best() then visits only the
 // shooters whose bound plus drift reaches the best exact power found so
 // far, computes their exact power with the owner's function, and returns
 // what a full scan in id order with `power > best` would: the greatest
@@ -18,7 +18,10 @@
 // Numbers: bounds and powers are double, as the solver's are.
 // Taken shooters (handed to a worker, not yet shot) are kept out of the
 // tree, so that a scheduler asking for the next one many times per shot
-// pays O(log n) per take, not a scan of what it holds.
+// pays O(log n) per take, not a scan of what it holds. Changes reach the
+// tree's inner nodes at the next Best(): path by path, or all at once
+// when a shot changed more than a quarter of the shooters (a small scene,
+// where one column reaches most patches).
 #ifndef RADIOSITY_SHOOTERS_H
 #define RADIOSITY_SHOOTERS_H
 
@@ -28,9 +31,10 @@
 
 class ShooterQueue {
  public:
-  // Every bound set at once (-inf or NaN: never chosen), O(n). The taken
-  // stay taken; none is when n changes.
-  void Build(const std::vector<double>& bounds);
+  // Every bound set at once (-inf or NaN: never chosen), with each
+  // shooter's weight (>= 0: how much of the drift applies to it), O(n).
+  // The taken stay taken; none is when n changes.
+  void Build(const std::vector<double>& bounds, const std::vector<double>& weights);
   int size() const { return n_; }
 
   // Shooter i's bound changed.
@@ -42,7 +46,7 @@ class ShooterQueue {
 
   // The untaken shooter with the greatest power(i) > 0, ties to the lowest
   // id; -1 when none has power above 0. Requires power(i) <= bound(i) +
-  // drift for every i (the owner's promise; drift >= 0, finite).
+  // weight(i) · drift for every i (the owner's promise; drift >= 0, finite).
   template <class Power>
   int Best(double drift, const Power& power);
 
@@ -51,15 +55,18 @@ class ShooterQueue {
 
  private:
   static double Clean(double b) { return b == b ? b : -HUGE_VAL; }  // NaN: out
-  void Update(size_t node, double value);
+  void Leaf(int i, double value);
+  void Flush();
 
   int n_ = 0;
   // Node 1 is the root, node k's children are 2k and 2k+1, shooter i is
   // leaf n + i (any n: a complete binary tree of 2n - 1 nodes). A node
   // holds the greatest bound of the untaken shooters under it.
   std::vector<double> tree_;
+  std::vector<double> weight_;  // the same tree of the weights (taken or not)
   std::vector<double> bound_;   // per shooter, taken or not
   std::vector<uint8_t> taken_;
+  std::vector<int32_t> dirty_;  // leaves changed since the last Flush
   std::vector<int32_t> stack_;  // Best's scratch
   long visited_ = 0;
 };
@@ -69,6 +76,7 @@ int ShooterQueue::Best(double drift, const Power& power) {
   int best = -1;
   double best_power = 0;
   if (n_ == 0) return best;
+  Flush();
   // Depth first, the larger child first, so that the best is met early
   // and prunes the rest: a node whose bound plus drift is below the best
   // power so far (or not above 0 before any) holds nothing better.
@@ -77,7 +85,7 @@ int ShooterQueue::Best(double drift, const Power& power) {
   while (!stack_.empty()) {
     const size_t k = size_t(stack_.back());
     stack_.pop_back();
-    const double reach = tree_[k] + drift;
+    const double reach = tree_[k] + weight_[k] * drift;
     if (!(reach >= best_power) || (best < 0 && !(reach > 0))) continue;
     if (k >= size_t(n_)) {
       const int i = int(k - size_t(n_));

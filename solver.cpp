@@ -20,7 +20,7 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
     const double a = mesh.patches[p].area;
     rho_.push_back(f.rho);
     area_.push_back(a);
-    weight_ = glm::max(weight_, f.rho * a);
+    weight_.push_back(a * std::max({f.rho.r, f.rho.g, f.rho.b}));
     total_area_ += a;
     emitted_ += (f.emission.r + f.emission.g + f.emission.b) * a;
     rho_area += f.rho * a;
@@ -113,8 +113,9 @@ int Solver::SelectByScan(const std::vector<char>* taken) const {
 // overshooting or light), plus 1e-9 of the magnitudes summed: far above
 // the rounding of either side (1e-16), so that the bound holds for the
 // computed powers too. For any other a, Power(p, a) moves from its value
-// at base_ by at most Σ_c area·ρ_c·|a_c − base_c| <= Σ_c weight_c·|Δa_c|,
-// the drift Select adds to every bound.
+// at base_ by at most Σ_c area·ρ_c·|a_c − base_c| <= weight · Σ_c |Δa_c|
+// (weight = area · max ρ): the drift Select adds to every bound, times
+// each patch's weight.
 double Solver::Bound(int p) const {
   if (blind_[p]) return -HUGE_VAL;
   if (!overshoot_ || !lit_[p]) return Abs(unshot_[p]) * area_[p];
@@ -128,13 +129,13 @@ void Solver::Rebase() {
   base_ = overshoot_ ? Ambient() : glm::dvec3(0.0);
   std::vector<double> bounds(unshot_.size());
   for (size_t p = 0; p < bounds.size(); ++p) bounds[p] = Bound(int(p));
-  queue_.Build(bounds);
+  queue_.Build(bounds, weight_);
 }
 
 int Solver::Select() {
   const glm::dvec3 amb = overshoot_ ? Ambient() : glm::dvec3(0.0);
   const glm::dvec3 d = glm::abs(amb - base_);
-  double drift = (weight_.r * d.r + weight_.g * d.g + weight_.b * d.b) * (1 + 1e-9);
+  double drift = (d.r + d.g + d.b) * (1 + 1e-9);
   if (!std::isfinite(drift)) {  // a run about to stop as diverging: no bound holds
     std::vector<char> taken(unshot_.size());
     for (size_t p = 0; p < taken.size(); ++p) taken[p] = queue_.Taken(int(p));

@@ -127,7 +127,7 @@ class Solver {
   double abs_sum_ = 0;              // Σ |unshot|·area (channels summed), too
   ShooterQueue queue_;              // per patch: Bound(p), taken
   glm::dvec3 base_{0.0};            // the overshooting estimate the bounds assume
-  glm::dvec3 weight_{0.0};          // max over patches of area·ρ, per channel
+  std::vector<double> weight_;      // per patch: area · max ρ, how far drift moves it
   glm::dvec3 reflect_{1.0};         // 1/(1−ρ̄): ambient interreflection factor
   double total_area_ = 0, emitted_ = 0;
   long shots_ = 0;

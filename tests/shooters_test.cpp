@@ -8,8 +8,8 @@
 
 namespace {
 
-// Shooters whose power is c_i + w_i·a for a shared a (|w_i| <= 1, so
-// drift |a − a0| bounds the move), on a coarse grid of values so that ties
+// Shooters whose power is c_i + w_i·a for a shared a (weight |w_i|, drift
+// |a − a0|), on a coarse grid of values so that ties
 // are common; the queue's bounds are the powers at a0. Best() must give
 // what a scan in id order gives, with shooters taken and released and
 // powers changed between the calls.
@@ -26,12 +26,17 @@ TEST(ShooterQueue, PicksWhatAFullScanPicks) {
       for (int i = 0; i < n; ++i) b[i] = c[i] + w[i] * a0;
       return b;
     };
+    auto weights = [&] {
+      std::vector<double> v(n);
+      for (int i = 0; i < n; ++i) v[i] = std::abs(w[i]) * (1 + 1e-12);
+      return v;
+    };
     for (int i = 0; i < n; ++i) {
       c[i] = grid(rng);
       w[i] = grid(rng) / 12.0;
     }
     ShooterQueue q;
-    q.Build(bounds());
+    q.Build(bounds(), weights());
     for (int step = 0; step < 3000; ++step) {
       switch (coin(rng)) {
         case 0: {  // a shot: one shooter's power changes
@@ -50,7 +55,7 @@ TEST(ShooterQueue, PicksWhatAFullScanPicks) {
           a += grid(rng) / 16.0;
           if (coin(rng) == 0) {
             a0 = a;
-            q.Build(bounds());
+            q.Build(bounds(), weights());
           }
           break;
         default:
@@ -68,9 +73,9 @@ TEST(ShooterQueue, PicksWhatAFullScanPicks) {
 
 TEST(ShooterQueue, NothingAboveZeroIsNoShooter) {
   ShooterQueue q;
-  q.Build({0.0, -1.0, NAN, -HUGE_VAL});
+  q.Build({0.0, -1.0, NAN, -HUGE_VAL}, {1.0, 1.0, 1.0, 1.0});
   EXPECT_EQ(q.Best(0.0, [](int i) { return i == 2 ? NAN : 0.0; }), -1);
-  q.Build({});
+  q.Build({}, {});
   EXPECT_EQ(q.Best(0.0, [](int) { return 1.0; }), -1);
 }
 
@@ -80,7 +85,7 @@ TEST(ShooterQueue, VisitsOnlyTheCandidates) {
   std::vector<double> b(n);
   for (int i = 0; i < n; ++i) b[i] = double((i * 2654435761u) % 100003);
   ShooterQueue q;
-  q.Build(b);
+  q.Build(b, std::vector<double>(n, 1.0));
   const int best = q.Best(0.0, [&](int i) { return b[i]; });
   EXPECT_EQ(b[best], *std::max_element(b.begin(), b.end()));
   EXPECT_EQ(q.Visited(), 1);
