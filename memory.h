@@ -11,7 +11,7 @@
 #include <string>
 
 // The master with -j 0: mesh, solver, subdivision's adjacency, the
-// hemicube and the pictures at the end of a wave (measured 620).
+// hemicube and the pictures at the end of a wave (measured 604).
 constexpr double kMasterBytesPerElement = 700;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
 // (measured 300).

@@ -28,18 +28,6 @@ glm::dvec3 EdgePoint(const glm::dvec3& p, const glm::dvec3& q, int k, int n) {
   return q + (p - q) * (double(n - k) / n);
 }
 
-// -0 and 0 are the same point (points are compared with ==).
-uint64_t HashBits(double d) {
-  if (d == 0) d = 0;
-  uint64_t b;
-  std::memcpy(&b, &d, 8);
-  return b;
-}
-
-size_t PointHash64(const glm::dvec3& p) {
-  return SplitMix64(SplitMix64(SplitMix64(HashBits(p.x)) ^ HashBits(p.y)) ^ HashBits(p.z));
-}
-
 // Vertex ids of one input face: points are welded by exact value so that
 // the pieces of a split polygon share their common edges. An
 // open-addressing table of ids, kept from face to face (a hash map per
@@ -54,7 +42,7 @@ class FaceVerts {
   int Id(const glm::dvec3& p) {
     if (2 * (used_.size() + 1) > table_.size()) Grow();
     const size_t mask = table_.size() - 1;
-    size_t i = PointHash64(p) & mask;
+    size_t i = PointHash()(p) & mask;
     for (; table_[i] >= 0; i = (i + 1) & mask)
       if ((*verts_)[table_[i]] == p) return table_[i];
     table_[i] = int(verts_->size());
@@ -71,7 +59,7 @@ class FaceVerts {
     used_.clear();
     const size_t mask = table_.size() - 1;
     for (int id : ids) {
-      size_t i = PointHash64((*verts_)[id]) & mask;
+      size_t i = PointHash()((*verts_)[id]) & mask;
       while (table_[i] >= 0) i = (i + 1) & mask;
       table_[i] = id;
       used_.push_back(i);
@@ -428,7 +416,7 @@ void Link(Mesh* m, int elem) {
 // A segment's hash by its end points in lexicographic order.
 size_t SegmentHash(const glm::dvec3& p, const glm::dvec3& q) {
   const bool lo = LexLess(p, q);
-  return SplitMix64(PointHash64(lo ? p : q) * 31 ^ PointHash64(lo ? q : p));
+  return SplitMix64(PointHash()(lo ? p : q) * 31 ^ PointHash()(lo ? q : p));
 }
 
 size_t SlotHash(const Mesh& m, int32_t s) {

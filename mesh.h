@@ -21,12 +21,13 @@
 
 #include <array>
 #include <cstdint>
-#include <functional>
+#include <cstring>
 #include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
 
+#include "hash.h"
 #include "scene.h"
 
 // A divided element has kChildren consecutive children: a quad 2 x 2 by
@@ -75,10 +76,16 @@ struct MeshFace {
 
 // Hash of a point by value (glm's == compares by value), for joining
 // equal points: a face's shared grid points, coplanar faces' shading.
+// -0 and 0 hash alike, as they compare equal.
 struct PointHash {
+  static uint64_t Bits(double d) {
+    if (d == 0) d = 0;
+    uint64_t b;
+    std::memcpy(&b, &d, 8);
+    return b;
+  }
   size_t operator()(const glm::dvec3& p) const {
-    std::hash<double> h;
-    return h(p.x) * 0x9E3779B97F4A7C15ull ^ h(p.y) * 0xC2B2AE3D27D4EB4Full ^ h(p.z);
+    return SplitMix64(SplitMix64(SplitMix64(Bits(p.x)) ^ Bits(p.y)) ^ Bits(p.z));
   }
 };
 
