@@ -18,7 +18,7 @@ NPROC    := $(shell nproc 2>/dev/null || echo 1)
 SAN      := -O1 -g1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := options.cpp app.cpp clock.cpp scene.cpp mesh.cpp hemicube.cpp subdivide.cpp solver.cpp scheduler.cpp results.cpp image.cpp coding.cpp ffcodec.cpp protocol.cpp version.cpp inprocess.cpp pool.cpp worker.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp
+LIB_SRCS  := options.cpp app.cpp clock.cpp scene.cpp mesh.cpp groups.cpp hemicube.cpp subdivide.cpp solver.cpp scheduler.cpp results.cpp image.cpp coding.cpp ffcodec.cpp protocol.cpp version.cpp inprocess.cpp pool.cpp worker.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp
 # Only for the unit tests and the benchmarks, never in the program.
 SIM_SRCS  := sim.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)
@@ -110,7 +110,7 @@ FUZZ_CXX     ?= clang++
 FUZZ_SECONDS ?= 60
 FUZZ_B       := build/fuzz
 FUZZ_SAN     := -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
-FUZZ_LIB     := $(addprefix $(FUZZ_B)/,scene.o mesh.o coding.o ffcodec.o protocol.o version.o hosts.o)
+FUZZ_LIB     := $(addprefix $(FUZZ_B)/,scene.o mesh.o groups.o coding.o ffcodec.o protocol.o version.o hosts.o)
 FUZZ_BINS    := $(FUZZ_B)/scene_fuzz $(FUZZ_B)/hosts_fuzz $(FUZZ_B)/protocol_fuzz
 
 $(FUZZ_B)/%.o: %.cpp

@@ -40,7 +40,9 @@ class Hemicube {
   int resolution() const { return res_; }
 
   // Form factors F(shooter -> e) > 0 for leaf elements e, in increasing e.
-  // The hemicube is turned by `angle` radians about the patch normal.
+  // The hemicube is turned by `angle` radians about the patch normal. A
+  // group's shooter (groups.h) looks from the group's centroid along its
+  // normal and leaves the members' elements out.
   void Column(const Mesh& mesh, int shooter, double angle,
               std::vector<FormFactor>* out, ColumnStats* stats = nullptr);
 

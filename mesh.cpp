@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "check.h"
+#include "groups.h"
 #include "hash.h"
 
 namespace {
@@ -263,6 +264,7 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
     CHECK(p.area > 0);
     p.center = c / p.area;
   }
+  FormGroups(opts, mesh);
   return true;
 }
 

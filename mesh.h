@@ -93,6 +93,18 @@ struct MeshOptions {
   double patch_size = 0.0;
   // Elements per patch edge (a patch becomes n x n elements).
   int elements_per_patch = 2;
+  // Shooter groups (groups.h): small patches that shoot together, formed
+  // in cells of group_size; 0 picks the default, patch size / 2.
+  bool groups = true;
+  double group_size = 0.0;
+};
+
+// Patches that shoot together from one hemicube (groups.h).
+struct PatchGroup {
+  std::vector<int> members;      // increasing; members[0] is the shooter
+  double area = 0.0;             // Σ member areas
+  glm::dvec3 center{0.0};        // area centroid: where the hemicube sits
+  glm::dvec3 normal{0.0};        // area-weighted mean normal, unit
 };
 
 struct Mesh {
@@ -102,6 +114,8 @@ struct Mesh {
   std::vector<MeshFace> faces;
   double patch_size = 0.0;     // as used
   double scene_diagonal = 0.0; // bounding-box diagonal, the scene's scale
+  std::vector<PatchGroup> groups;  // FormGroups (groups.h)
+  std::vector<int32_t> group_of;   // per patch: index into groups, or -1
 
   // Kept by Divide(), keyed by a vertex id pair (EdgeKey; vertex ids are
   // per face, so these never join two faces):

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "check.h"
+#include "groups.h"
 
 namespace {
 double Abs(const glm::dvec3& u) { return std::abs(u.r) + std::abs(u.g) + std::abs(u.b); }
@@ -82,15 +83,26 @@ glm::dvec3 Solver::ToShoot(int p) const {
   return unshot_[p] + mesh_.faces[mesh_.patches[p].face].rho * Ambient();
 }
 
+double Solver::Power(int p, const glm::dvec3& amb) const {
+  const Patch& pa = mesh_.patches[p];
+  glm::dvec3 x = lit_[p] ? unshot_[p] + mesh_.faces[pa.face].rho * amb : unshot_[p];
+  return Abs(x) * pa.area;
+}
+
 int Solver::Select(const std::vector<char>* taken) const {
   const glm::dvec3 amb = overshoot_ ? Ambient() : glm::dvec3(0.0);
   int best = -1;
   double best_power = 0;
   for (size_t p = 0; p < unshot_.size(); ++p) {
     if ((taken && (*taken)[p]) || blind_[p]) continue;
-    const Patch& pa = mesh_.patches[p];
-    glm::dvec3 x = lit_[p] ? unshot_[p] + mesh_.faces[pa.face].rho * amb : unshot_[p];
-    double power = Abs(x) * pa.area;
+    double power;
+    if (const PatchGroup* g = GroupOf(mesh_, int(p))) {
+      if (g->members[0] != int(p)) continue;  // its group's shooter shoots for it
+      power = 0;
+      for (int m : g->members) power += Power(m, amb);
+    } else {
+      power = Power(int(p), amb);
+    }
     if (power > best_power) {
       best_power = power;
       best = int(p);
@@ -100,22 +112,32 @@ int Solver::Select(const std::vector<char>* taken) const {
 }
 
 void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
-  const Patch& shooter = mesh_.patches[p];
-  // A patch that sees no element sends its light out of the scene: its
-  // unshot radiosity is spent, and it is never chosen again (nothing can
-  // send it light either, by reciprocity).
-  if (column.empty()) blind_[p] = 1;
-  const glm::dvec3 x = column.empty() ? unshot_[p] : ToShoot(p);
-  abs_sum_ -= Abs(unshot_[p]) * shooter.area;
-  unshot_[p] -= x;
-  abs_sum_ += Abs(unshot_[p]) * shooter.area;
-  unshot_sum_ -= x * shooter.area;
+  // A group (groups.h) shoots Σ x·A of its members from one column, and
+  // each member gives up exactly its own x: what leaves is what is shot.
+  const PatchGroup* group = GroupOf(mesh_, p);
+  const int single[1] = {p};
+  const int* members = group ? group->members.data() : single;
+  const size_t count = group ? group->members.size() : 1;
+  glm::dvec3 xa(0.0);  // Σ x·A of what shoots
+  for (size_t i = 0; i < count; ++i) {
+    const int m = members[i];
+    const double area = mesh_.patches[m].area;
+    // A shooter that sees no element sends its light out of the scene:
+    // its unshot radiosity is spent, and it is never chosen again (nothing
+    // can send it light either, by reciprocity).
+    if (column.empty()) blind_[m] = 1;
+    const glm::dvec3 x = column.empty() ? unshot_[m] : ToShoot(m);
+    abs_sum_ -= Abs(unshot_[m]) * area;
+    unshot_[m] -= x;
+    abs_sum_ += Abs(unshot_[m]) * area;
+    unshot_sum_ -= x * area;
+    xa += x * area;
+  }
   // Power arriving at element e and reflected: ρ_e · x · F · A_shooter.
   // Per element only B changes, by that over A_e; a patch's unshot
   // radiosity gains the same summed over its elements, and since they
   // share one ρ it is enough to sum F per patch here (the master's
   // per-shot cost bounds the speedup, paper graph 2).
-  const glm::dvec3 xa = x * shooter.area;
   // Ids increase along a column: the last is the largest.
   CHECK(column.empty() || size_t(column.back().elem) < patch_of_.size());
   for (const FormFactor& ff : column) {

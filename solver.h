@@ -35,12 +35,16 @@ class Solver {
   // overshoot: ambient overshooting (Feda & Purgathofer 1992).
   Solver(const Mesh& mesh, bool overshoot);
 
-  // The patch with the largest power still to shoot (|unshot + overshoot
-  // estimate| × area, channels summed) among those not marked in `taken`
-  // (may be null), or -1 when there is nothing left to shoot.
+  // The shooter with the largest power still to shoot (|unshot + overshoot
+  // estimate| × area, channels summed; a group's summed over its members)
+  // among those not marked in `taken` (may be null), or -1 when there is
+  // nothing left to shoot. Shooters are patch ids: a patch alone, or a
+  // group's first member for the group (groups.h); other members are
+  // never returned, and nothing of them need be marked in `taken`.
   int Select(const std::vector<char>* taken = nullptr) const;
 
-  // Shoots patch p along its column. The overshooting estimate is taken
+  // Shoots shooter p (a patch, or a group by its first member) along its
+  // column. The overshooting estimate is taken
   // here, from the ambient term as it is now (paper §4.2), not when p was
   // selected. The column may predate divisions (a worker computed it
   // before it heard of them): what an element since divided receives goes
@@ -75,6 +79,7 @@ class Solver {
 
  private:
   glm::dvec3 ToShoot(int p) const;
+  double Power(int p, const glm::dvec3& amb) const;  // one patch's, for Select
   void Resum();
   void Grow();
 

@@ -35,6 +35,8 @@ std::string RawScene(const proto::SceneSetup& m) {
   WLE(&s, m.seed, 4);
   WVar(&s, uint32_t(m.mesh.elements_per_patch));
   WF64(&s, m.mesh.patch_size);
+  s += char(m.mesh.groups);
+  WF64(&s, m.mesh.group_size);
   WF64(&s, m.heartbeat_s);
   WVec(&s, m.scene.lo);
   WVec(&s, m.scene.hi);
@@ -78,6 +80,7 @@ proto::SceneSetup TestSetup() {
   for (size_t i = 0; i < m.scene.faces.size(); ++i) m.scene.faces[i].index = int(3 * i + 1);
   m.mesh.patch_size = 0.45;
   m.mesh.elements_per_patch = 3;
+  m.mesh.group_size = 0.625;
   m.resolution = 128;
   m.rotate = 0;
   m.seed = 0xdeadbeef;
@@ -153,7 +156,7 @@ TEST(Protocol, HelloRoundTrips) {
     std::string frame;
     proto::EncodeHello(h, &frame);
     const std::string p = PayloadOf(frame, Msg::kHello);
-    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x02\x00", 6));  // magic, version
+    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x03\x00", 6));  // magic, version
     proto::Hello d;
     d.magic = 0;
     d.version = 0;
@@ -164,7 +167,7 @@ TEST(Protocol, HelloRoundTrips) {
     EXPECT_EQ(d.build, b);
   }
   // A build string longer than 256 bytes or not printable is refused.
-  std::string p = "RADW" + std::string("\x02\x00", 2);
+  std::string p = "RADW" + std::string("\x03\x00", 2);
   std::string long_build = p;
   WVar(&long_build, 257);
   long_build += std::string(257, 'x');
@@ -215,6 +218,8 @@ TEST(Protocol, SceneRoundTripsBitForBitAndRebuildsTheSameMesh) {
   EXPECT_EQ(d.seed, m.seed);
   EXPECT_EQ(Bits(d.heartbeat_s), Bits(m.heartbeat_s));
   EXPECT_EQ(Bits(d.mesh.patch_size), Bits(m.mesh.patch_size));
+  EXPECT_EQ(d.mesh.groups, m.mesh.groups);
+  EXPECT_EQ(Bits(d.mesh.group_size), Bits(m.mesh.group_size));
   EXPECT_EQ(d.mesh.elements_per_patch, m.mesh.elements_per_patch);
   for (int k = 0; k < 3; ++k) {
     EXPECT_EQ(Bits(d.scene.lo[k]), Bits(m.scene.lo[k]));
@@ -289,6 +294,11 @@ TEST(Protocol, SceneValuesOutOfRangeAreRefused) {
       {"patch size < 0", [](S* m) { m->mesh.patch_size = -0.5; }, false},
       {"patch size inf", [](S* m) { m->mesh.patch_size = HUGE_VAL; }, false},
       {"patch size nan", [](S* m) { m->mesh.patch_size = std::nan(""); }, false},
+      {"no groups", [](S* m) { m->mesh.groups = false; }, true},
+      {"group size 0", [](S* m) { m->mesh.group_size = 0; }, true},
+      {"group size 2", [](S* m) { m->mesh.group_size = 2; }, true},
+      {"group size < 0", [](S* m) { m->mesh.group_size = -1; }, false},
+      {"group size nan", [](S* m) { m->mesh.group_size = std::nan(""); }, false},
       {"heartbeat 1 ms", [](S* m) { m->heartbeat_s = 1e-3; }, true},
       {"heartbeat max", [](S* m) { m->heartbeat_s = proto::kMaxHeartbeat; }, true},
       {"heartbeat 0", [](S* m) { m->heartbeat_s = 0; }, false},
@@ -488,7 +498,7 @@ TEST(Protocol, HugeCountsFailFastWithoutAllocating) {
     sc += std::string(10, '\0');
     EXPECT_FALSE(proto::DecodeScene(sc, &d, &err));
     EXPECT_NE(err.find("face count"), std::string::npos) << err;
-    std::string mats = sc.substr(0, 72);  // fixed fields, then the material count
+    std::string mats = sc.substr(0, 81);  // fixed fields, then the material count
     WVar(&mats, n);
     EXPECT_FALSE(proto::DecodeScene(mats, &d, &err));
     EXPECT_NE(err.find("material count"), std::string::npos) << err;
