@@ -23,6 +23,7 @@ struct PatchInfo {
   glm::dvec3 c{0.0}, n{0.0};
   double offset = 0;
   std::vector<int> corners;  // vertex ids of its elements' corners
+  glm::dvec3 lo{0.0}, hi{0.0};  // their bounding box
   bool candidate = false;
 };
 
@@ -50,9 +51,14 @@ class Grouper {
       const std::vector<int>& cell = cells[CellOf(info_[p].c)];
       group.assign(1, int(p));
       taken[p] = 1;
+      glm::dvec3 lo = info_[p].lo, hi = info_[p].hi;
       for (int q : cell) {
         if (q <= int(p) || taken[q]) continue;
         if (int(group.size()) == kMaxGroup) break;
+        // No wider than a patch: the mesh's own bound on where light
+        // leaves from.
+        const glm::dvec3 l = glm::min(lo, info_[q].lo), h = glm::max(hi, info_[q].hi);
+        if (glm::length(h - l) > L_) continue;
         bool ok = true;
         for (int g : group)
           if (!Compatible(g, q)) {
@@ -62,6 +68,8 @@ class Grouper {
         if (!ok) continue;
         group.push_back(q);
         taken[q] = 1;
+        lo = l;
+        hi = h;
       }
       if (group.size() < 2) continue;
       PatchGroup pg;
@@ -94,18 +102,19 @@ class Grouper {
       in.c = pa.center;
       in.n = f.normal;
       in.offset = f.offset;
-      double r = 0;
+      in.lo = in.hi = pa.center;
       for (int e : pa.elements) {
         const Element& el = m_.elems[e];
         for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
           if (std::find(in.corners.begin(), in.corners.end(), el.v[k]) == in.corners.end())
             in.corners.push_back(el.v[k]);
-          r = std::max(r, glm::length(m_.verts[el.v[k]] - pa.center));
+          in.lo = glm::min(in.lo, m_.verts[el.v[k]]);
+          in.hi = glm::max(in.hi, m_.verts[el.v[k]]);
         }
       }
       // Emitters shoot alone: their direct light is most of the answer.
       const glm::dvec3& ke = f.emission;
-      in.candidate = ke.r == 0 && ke.g == 0 && ke.b == 0 && 2 * r <= L_;
+      in.candidate = ke.r == 0 && ke.g == 0 && ke.b == 0 && glm::length(in.hi - in.lo) <= L_;
     }
   }
 

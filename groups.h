@@ -10,14 +10,17 @@
 // group is kept small against the patch size and never spans a wall.
 //
 // The rule (man page, MESH): a patch may join a group when it emits
-// nothing and its extent is at most L (L = MeshOptions::group_size,
-// default patch size / 2, at least patch size / 16). Groups are formed inside the cells of a grid
-// of cell L over the patch centres, greedily in patch order, and a patch
-// joins only when, against every member already in: the normals are
-// within kGroupAngle; each lies in front of the other's plane, or behind
-// it by at most L/8 (they neither face each other nor sit back to back,
-// nor one behind the other); and the segment between their centres,
-// lifted by L/16 along each normal, crosses no element of another patch
+// nothing and its bounding box is at most L across (L =
+// MeshOptions::group_size, default the patch size, at least patch size /
+// 16). Groups are formed inside the cells of a grid of cell L over the
+// patch centres, greedily in patch order; a group's members' bounding box
+// stays at most L across (no wider than a patch, whose light the mesh
+// already sends from one centre), and a patch joins only when, against
+// every member already in: the normals are within kGroupAngle; each lies
+// in front of the other's plane, or behind it by at most L/16 (they
+// neither face each other nor sit back to back, nor one behind the
+// other); and the segment between their centres, lifted by L/32 along
+// each normal, crosses no element of another patch
 // (no wall, no box in between). At most kMaxGroup members.
 //
 // Derived from the mesh as built and the options alone, deterministically:
