@@ -135,12 +135,8 @@ TEST(Groups, ClosedBoxAbsorbsWhatItEmitsWithGroups) {
     ro.epsilon = 1e-6;
     ASSERT_EQ(RunSequential(&m, ro, &solver, nullptr, nullptr).status, RunStatus::kConverged);
     const auto b = FaceRadiosity(m, solver.radiosity());
-    glm::dvec3 absorbed(0.0), emitted(0.0);
-    for (size_t f = 0; f < s.faces.size(); ++f) {
-      const Material& mat = s.materials[s.faces[f].material];
-      absorbed += s.faces[f].area * (1.0 - mat.kd) / mat.kd * (b[f] - mat.ke);
-      emitted += s.faces[f].area * mat.ke;
-    }
+    glm::dvec3 absorbed, emitted;
+    PowerBalance(s, b, &absorbed, &emitted);
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(absorbed[k], emitted[k], 0.01 * emitted[k]);
     (groups ? with : without) = b;
   }
