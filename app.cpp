@@ -15,6 +15,7 @@
 #include "connect.h"
 #include "errorchart.h"
 #include "files.h"
+#include "groups.h"
 #include "hosts.h"
 #include "inprocess.h"
 #include "memory.h"
@@ -463,8 +464,9 @@ void MasterRun::WriteOutputs() {
     std::fprintf(stderr,
                  "radiosity: %s: %ld shots in %.2f s, unshot %.3g of emitted; "
                  "%zu patches, %ld elements (%ld built; %d waves, %ld division passes "
-                 "in %.3f s); results in %s/\n",
+                 "in %.3f s; %zu shooters, %zu of them groups); results in %s/\n",
                  how.c_str(), r.shots, r.seconds, r.unshot, mesh_.patches.size(), mesh_.LeafCount(),
-                 built_, r.waves, r.passes, r.subdivide_s, out.c_str());
+                 built_, r.waves, r.passes, r.subdivide_s, Shooters(mesh_), mesh_.groups.size(),
+                 out.c_str());
   }
 }

@@ -75,6 +75,8 @@ void PutOptions(std::string* w, const SolveOptions& o) {
   PutFixed64(w, o.log_every);
   PutFixed32(w, o.mesh.elements_per_patch);
   PutF64(w, o.mesh.patch_size);
+  PutU8(w, o.mesh.groups);
+  PutF64(w, o.mesh.group_size);
   PutU8(w, o.subdivide);
   PutF64(w, o.sub.threshold);
   PutF64(w, o.sub.floor);
@@ -96,6 +98,8 @@ SolveOptions GetOptions(In* r) {
   o.log_every = long(r->I64());
   o.mesh.elements_per_patch = r->I32();
   o.mesh.patch_size = r->F64();
+  o.mesh.groups = r->Bool();
+  o.mesh.group_size = r->F64();
   o.subdivide = r->Bool();
   o.sub.threshold = r->F64();
   o.sub.floor = r->F64();
@@ -456,6 +460,10 @@ std::string CompareOptions(const SolveOptions& a, const SolveOptions& b) {
   if (a.mesh.patch_size != b.mesh.patch_size)
     return differ("--patch-size", a.mesh.patch_size ? num(a.mesh.patch_size) : "default",
                   b.mesh.patch_size ? num(b.mesh.patch_size) : "default");
+  if (a.mesh.groups != b.mesh.groups) return flag("--no-groups", !a.mesh.groups, !b.mesh.groups);
+  if (a.mesh.groups && a.mesh.group_size != b.mesh.group_size)
+    return differ("--group-size", a.mesh.group_size ? num(a.mesh.group_size) : "default",
+                  b.mesh.group_size ? num(b.mesh.group_size) : "default");
   if (a.subdivide != b.subdivide) return flag("--no-subdivide", !a.subdivide, !b.subdivide);
   if (!a.subdivide) return "";
   if (a.sub.floor != b.sub.floor) return differ("--subdivide-floor", num(a.sub.floor), num(b.sub.floor));

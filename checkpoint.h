@@ -26,7 +26,7 @@
 //   options   what shapes the answer (SolveOptions, in field order): u8
 //             overshoot, i32 resolution, u8 rotate, u32 seed, i64
 //             log_every, i32 elements per patch, f64 patch size, u8
-//             subdivide, f64 threshold, f64 floor, f64 decay, f64
+//             groups, f64 group size, u8 subdivide, f64 threshold, f64 floor, f64 decay, f64
 //             min_size, i32 max_level, u8 waves, f64 wave_fraction,
 //             i64 between, f64 quiet
 //   edits     ARRAY<i32>: the elements divided, in the order Divide() ran
@@ -55,7 +55,7 @@
 #include "scene.h"
 #include "subdivide.h"
 
-constexpr uint32_t kCheckpointVersion = 1;
+constexpr uint32_t kCheckpointVersion = 2;
 
 // The options that shape the answer: a checkpoint is resumed only with
 // the same ones.

@@ -7,6 +7,7 @@
 
 #include "check.h"
 #include "clock.h"
+#include "groups.h"
 #include "hash.h"
 
 namespace {
@@ -473,6 +474,7 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
     zc[h] = float((nf[2] - nf[0] - nf[1] * boff) / k);
   }
   for (int r = cf.lb, at = cf.pb; r < cf.le; ++r, ++at) {
+    if (self_ >= 0 && mesh.group_of[mesh.elems[elem_[r]].patch] == self_) continue;
     const int32_t* vid = &outline_[outline_at_[at]];
     const int n = outline_at_[at + 1] - outline_at_[at];
     uint32_t all = ~0u, any = 0;
@@ -539,7 +541,12 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
   const double t0 = MonotonicSeconds();
   const Patch& sp = mesh.patches[shooter];
   const MeshFace& sf = mesh.faces[sp.face];
-  const glm::dvec3 c = sp.center, n = sf.normal;
+  // A group's first member shoots for it all (groups.h), from the group's
+  // centroid along its mean normal; its members receive nothing from it.
+  const PatchGroup* group = GroupOf(mesh, shooter);
+  self_ = group ? mesh.group_of[shooter] : -1;
+  const glm::dvec3 c = group ? group->center : sp.center;
+  const glm::dvec3 n = group ? group->normal : sf.normal;
   // Any tangent will do; the face's first edge keeps it stable per face.
   const Element& e0 = mesh.elems[sp.elements[0]];
   glm::dvec3 t = mesh.verts[e0.v[1]] - mesh.verts[e0.v[0]];

@@ -51,7 +51,9 @@ class Hemicube {
   int resolution() const { return res_; }
 
   // Form factors F(shooter -> e) > 0 for leaf elements e, in increasing e.
-  // The hemicube is turned by `angle` radians about the patch normal.
+  // The hemicube is turned by `angle` radians about the patch normal. A
+  // group's shooter (groups.h) looks from the group's centroid along its
+  // normal and leaves the members' elements out.
   void Column(const Mesh& mesh, int shooter, double angle,
               std::vector<FormFactor>* out, ColumnStats* stats = nullptr);
 
@@ -140,6 +142,7 @@ class Hemicube {
   glm::dvec3 c_{0.0}, u_{0.0}, v_{0.0}, n_{0.0};
   float near_ = 0;
   double coplanar_ = 0, margin_ = 0;
+  int32_t self_ = -1;                // the shooter's group (its members are skipped), or -1
   std::vector<float> lx_, ly_, lz_;  // face vertices in the shooter frame
   std::vector<uint32_t> code_;       // outcodes per vertex, 5 bits per face
   std::vector<float> sx_[5], sy_[5]; // pixel x, y on each hemicube face

@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "check.h"
+#include "groups.h"
 #include "hash.h"
 #include "surface.h"
 
@@ -334,6 +335,7 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
     CHECK(p.area > 0);
     p.center = c / p.area;
   }
+  FormGroups(opts, mesh);
   return true;
 }
 

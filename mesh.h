@@ -98,6 +98,18 @@ struct MeshOptions {
   // Join adjacent coplanar faces of one material into surfaces before
   // cutting (surface.h; --no-join turns it off).
   bool join = true;
+  // Shooter groups (groups.h): small patches that shoot together, formed
+  // in cells of group_size; 0 picks the default, the patch size.
+  bool groups = true;
+  double group_size = 0.0;
+};
+
+// Patches that shoot together from one hemicube (groups.h).
+struct PatchGroup {
+  std::vector<int> members;      // increasing; members[0] is the shooter
+  double area = 0.0;             // Σ member areas
+  glm::dvec3 center{0.0};        // area centroid: where the hemicube sits
+  glm::dvec3 normal{0.0};        // area-weighted mean normal, unit
 };
 
 struct Mesh {
@@ -114,6 +126,8 @@ struct Mesh {
   // scene face and one more.
   std::vector<glm::dvec3> face_corners;
   std::vector<int> corner_begin;
+  std::vector<PatchGroup> groups;  // FormGroups (groups.h)
+  std::vector<int32_t> group_of;   // per patch: index into groups, or -1
 
   // Adjacency for Divide() and LeafNeighbours(), made by ConnectEdges()
   // and kept by Divide(): flat arrays indexed by vertex or by edge slot

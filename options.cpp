@@ -113,6 +113,9 @@ const char kUsage[] =
     "      --elements N       elements per patch edge (default 2)\n"
     "      --no-join          cut every face on its own (default: join coplanar faces\n"
     "                         of one material into surfaces)\n"
+    "      --no-groups        every patch shoots alone (default: small patches\n"
+    "                         near one another that face alike shoot as a group)\n"
+    "      --group-size L     cell of the shooter groups (default: the patch size)\n"
     "      --no-subdivide     keep the mesh as built (default: divide where light changes)\n"
     "      --no-waves         one wave: never restart on the finer mesh\n"
     "      --subdivide-floor F  lowest dividing-factor threshold (default 0.2)\n"
@@ -144,7 +147,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
     kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
     kNoJoin, kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
     kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect, kConverge,
-    kCheckpoint, kCheckpointEvery, kResume,
+    kCheckpoint, kCheckpointEvery, kResume, kNoGroups, kGroupSize,
   };
   static const option kLong[] = {
       {"out", required_argument, nullptr, 'o'},
@@ -169,6 +172,8 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       {"patch-size", required_argument, nullptr, kPatchSize},
       {"elements", required_argument, nullptr, kElements},
       {"no-join", no_argument, nullptr, kNoJoin},
+      {"no-groups", no_argument, nullptr, kNoGroups},
+      {"group-size", required_argument, nullptr, kGroupSize},
       {"no-subdivide", no_argument, nullptr, kNoSubdivide},
       {"no-waves", no_argument, nullptr, kNoWaves},
       {"subdivide-floor", required_argument, nullptr, kFloor},
@@ -248,6 +253,10 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
         ok = Integer("--elements", optarg, 1, 64, &o.mesh.elements_per_patch, err);
         break;
       case kNoJoin: o.mesh.join = false; break;
+      case kNoGroups: o.mesh.groups = false; break;
+      case kGroupSize:
+        ok = Number("--group-size", optarg, 1e-300, 1e300, &o.mesh.group_size, err);
+        break;
       case kNoSubdivide: o.subdivide = false; no_subdivide = true; break;
       case kNoWaves: o.sub.waves = false; no_waves = true; break;
       case kFloor:

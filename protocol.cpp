@@ -86,6 +86,8 @@ bool ValidSetup(const SceneSetup& m, std::string* err) {
                 " is not in 1..64");
   if (!std::isfinite(m.mesh.patch_size) || m.mesh.patch_size < 0)
     return fail("patch size is not finite and >= 0");
+  if (!std::isfinite(m.mesh.group_size) || m.mesh.group_size < 0)
+    return fail("group size is not finite and >= 0");
   if (!(m.heartbeat_s > 0 && m.heartbeat_s <= kMaxHeartbeat))
     return fail("heartbeat period is not in (0, " + std::to_string(int(kMaxHeartbeat)) + "] s");
   const Scene& s = m.scene;
@@ -205,6 +207,8 @@ void EncodeScene(const SceneSetup& m, std::string* out) {
   PutVarint(out, uint32_t(m.mesh.elements_per_patch));
   PutF64(out, m.mesh.patch_size);
   PutU8(out, m.mesh.join);
+  PutU8(out, m.mesh.groups);
+  PutF64(out, m.mesh.group_size);
   PutF64(out, m.heartbeat_s);
   PutScene(m.scene, out);
   EndFrame(start, out);
@@ -325,6 +329,11 @@ bool DecodeScene(const std::string& payload, SceneSetup* m, std::string* err) {
   if (!r.U8(&join, "join")) return false;
   if (join > 1) return r.Fail("join " + std::to_string(join) + " is not 0 or 1");
   s.mesh.join = join;
+  uint8_t groups;
+  if (!r.U8(&groups, "groups")) return false;
+  if (groups > 1) return r.Fail("groups " + std::to_string(groups) + " is not 0 or 1");
+  s.mesh.groups = groups;
+  if (!r.Finite(&s.mesh.group_size, "group size")) return false;
   if (!r.Finite(&s.heartbeat_s, "heartbeat period")) return false;
   if (!r.FiniteVec(&s.scene.lo, "bounding box lo") || !r.FiniteVec(&s.scene.hi, "bounding box hi"))
     return false;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "check.h"
+#include "groups.h"
 
 namespace {
 double Abs(const glm::dvec3& u) { return std::abs(u.r) + std::abs(u.g) + std::abs(u.b); }
@@ -25,6 +26,14 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
     emitted_ += (f.emission.r + f.emission.g + f.emission.b) * a;
     rho_area += f.rho * a;
   }
+  // A group's drift moves Σ of its members' powers: its key (members[0])
+  // carries their weights summed, the other members none (never chosen).
+  for (const PatchGroup& g : mesh.groups)
+    for (size_t i = 1; i < g.members.size(); ++i) {
+      weight_[size_t(g.members[0])] += weight_[size_t(g.members[i])];
+      weight_[size_t(g.members[i])] = 0;
+    }
+  group_dirty_.assign(mesh.groups.size(), 0);
   if (total_area_ > 0) {
     // Cohen et al.'s interreflection factor 1/(1−ρ̄). ρ̄ = 1 (a scene that
     // reflects everything) has no finite answer; the cap keeps the estimate
@@ -94,13 +103,22 @@ double Solver::Power(int p, const glm::dvec3& ambient) const {
   return Abs(x) * area_[p];
 }
 
+// A lone patch's Power, a group's summed over its members (groups.h).
+double Solver::ShooterPower(int p, const glm::dvec3& ambient) const {
+  const PatchGroup* g = GroupOf(mesh_, p);
+  if (!g) return Power(p, ambient);
+  double power = 0;
+  for (int m : g->members) power += Power(m, ambient);
+  return power;
+}
+
 int Solver::SelectByScan(const std::vector<char>* taken) const {
   const glm::dvec3 amb = overshoot_ ? Ambient() : glm::dvec3(0.0);
   int best = -1;
   double best_power = 0;
   for (size_t p = 0; p < unshot_.size(); ++p) {
-    if ((taken && (*taken)[p]) || blind_[p]) continue;
-    const double power = Power(int(p), amb);
+    if ((taken && (*taken)[p]) || blind_[p] || !IsShooter(mesh_, int(p))) continue;
+    const double power = ShooterPower(int(p), amb);
     if (power > best_power) {
       best_power = power;
       best = int(p);
@@ -116,11 +134,24 @@ int Solver::SelectByScan(const std::vector<char>* taken) const {
 // at base_ by at most Σ_c area·ρ_c·|a_c − base_c| <= weight · Σ_c |Δa_c|
 // (weight = area · max ρ): the drift Select adds to every bound, times
 // each patch's weight.
-double Solver::Bound(int p) const {
-  if (blind_[p]) return -HUGE_VAL;
+double Solver::PatchBound(int p) const {
   if (!overshoot_ || !lit_[p]) return Abs(unshot_[p]) * area_[p];
   const glm::dvec3 shared = rho_[p] * base_;
   return (Abs(unshot_[p] + shared) + 1e-9 * (Abs(unshot_[p]) + Abs(shared))) * area_[p];
+}
+
+// Per shooter: a group's bound is its members' summed in the order
+// ShooterPower sums their powers (floating-point addition is monotone, so
+// it bounds that sum), under its weight summed likewise (the constructor);
+// -inf for the other members and the blind. A group's members go blind
+// together (Shoot).
+double Solver::Bound(int p) const {
+  if (blind_[p] || !IsShooter(mesh_, p)) return -HUGE_VAL;
+  const PatchGroup* g = GroupOf(mesh_, p);
+  if (!g) return PatchBound(p);
+  double bound = 0;
+  for (int m : g->members) bound += PatchBound(m);
+  return bound;
 }
 
 // The bounds again at the overshooting estimate as it is now: O(patches),
@@ -147,25 +178,35 @@ int Solver::Select() {
     Rebase();
     drift = 0;
   }
-  return queue_.Best(drift, [&](int p) { return Power(p, amb); });
+  return queue_.Best(drift, [&](int p) { return ShooterPower(p, amb); });
 }
 
 void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
-  // A patch that sees no element sends its light out of the scene: its
-  // unshot radiosity is spent, and it is never chosen again (nothing can
-  // send it light either, by reciprocity).
-  if (column.empty()) blind_[p] = 1;
-  const glm::dvec3 x = column.empty() ? unshot_[p] : ToShoot(p);
-  abs_sum_ -= Abs(unshot_[p]) * area_[p];
-  unshot_[p] -= x;
-  abs_sum_ += Abs(unshot_[p]) * area_[p];
-  unshot_sum_ -= x * area_[p];
+  // A group (groups.h) shoots Σ x·A of its members from one column, and
+  // each member gives up exactly its own x: what leaves is what is shot.
+  const PatchGroup* group = GroupOf(mesh_, p);
+  const int single[1] = {p};
+  const int* members = group ? group->members.data() : single;
+  const size_t count = group ? group->members.size() : 1;
+  glm::dvec3 xa(0.0);  // Σ x·A of what shoots
+  for (size_t i = 0; i < count; ++i) {
+    const int m = members[i];
+    // A shooter that sees no element sends its light out of the scene:
+    // its unshot radiosity is spent, and it is never chosen again (nothing
+    // can send it light either, by reciprocity).
+    if (column.empty()) blind_[m] = 1;
+    const glm::dvec3 x = column.empty() ? unshot_[m] : ToShoot(m);
+    abs_sum_ -= Abs(unshot_[m]) * area_[m];
+    unshot_[m] -= x;
+    abs_sum_ += Abs(unshot_[m]) * area_[m];
+    unshot_sum_ -= x * area_[m];
+    xa += x * area_[m];
+  }
   // Power arriving at element e and reflected: ρ_e · x · F · A_shooter.
   // Per element only B changes, by that over A_e; a patch's unshot
   // radiosity gains the same summed over its elements, and since they
   // share one ρ it is enough to sum F per patch here (the master's
   // per-shot cost bounds the speedup, paper graph 2).
-  const glm::dvec3 xa = x * area_[p];
   // Ids increase along a column: the last is the largest.
   CHECK(column.empty() || size_t(column.back().elem) < patch_of_.size());
   // At 10^5 elements and more the arrays are far larger than the caches
@@ -215,8 +256,21 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     unshot_[q] += reflected / area_[q];
     abs_sum_ += Abs(unshot_[q]) * area_[q];
     unshot_sum_ += reflected;
-    queue_.Set(q, Bound(q));
+    // Light reaching a group's member moves its group's key, once a shot.
+    const int32_t g = mesh_.group_of.empty() ? -1 : mesh_.group_of[size_t(q)];
+    if (g < 0) {
+      queue_.Set(q, Bound(q));
+    } else if (!group_dirty_[size_t(g)]) {
+      group_dirty_[size_t(g)] = 1;
+      dirty_groups_.push_back(g);
+    }
   }
+  for (int32_t g : dirty_groups_) {
+    group_dirty_[size_t(g)] = 0;
+    const int key = mesh_.groups[size_t(g)].members[0];
+    queue_.Set(key, Bound(key));
+  }
+  dirty_groups_.clear();
   queue_.Set(p, Bound(p));
   touched_.clear();
   ++times_shot_[p];

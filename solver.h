@@ -36,9 +36,12 @@ class Solver {
   // overshoot: ambient overshooting (Feda & Purgathofer 1992).
   Solver(const Mesh& mesh, bool overshoot);
 
-  // The patch with the largest power still to shoot (|unshot + overshoot
-  // estimate| × area, channels summed; ties to the lowest id) among those
-  // not taken, or -1 when there is nothing left to shoot. Exactly the
+  // The shooter with the largest power still to shoot (|unshot + overshoot
+  // estimate| × area, channels summed; a group's summed over its members;
+  // ties to the lowest id) among those not taken, or -1 when there is
+  // nothing left to shoot. Shooters are patch ids: a patch alone, or a
+  // group's first member for the group (groups.h); other members are
+  // never returned, taken or released. Exactly the
   // choice of SelectByScan, found in a ShooterQueue (shooters.h): the
   // overshooting estimate, shared by all patches, is bounded by how far it
   // moved since the queue's bounds were set (Bound, Select).
@@ -48,15 +51,16 @@ class Solver {
   void Take(int p) { queue_.Take(p); }
   void Release(int p) { queue_.Release(p); }
   bool Taken(int p) const { return queue_.Taken(p); }
-  // Select() by looking at every patch not marked in `taken` (may be
+  // Select() by looking at every shooter not marked in `taken` (may be
   // null): the reference the queue is tested against.
   int SelectByScan(const std::vector<char>* taken = nullptr) const;
 
-  // Shoots patch p along its column. The overshooting estimate is taken
-  // here, from the ambient term as it is now (paper §4.2), not when p was
-  // selected. The column may predate divisions (a worker computed it
-  // before it heard of them): what an element since divided receives goes
-  // to every leaf under it alike.
+  // Shoots shooter p (a patch, or a group by its first member) along its
+  // column. The overshooting estimate is taken here, from the ambient
+  // term as it is now (paper §4.2), not when p was selected. The column
+  // may predate divisions (a worker computed it before it heard of them):
+  // what an element since divided receives goes to every leaf under it
+  // alike.
   void Shoot(int p, const std::vector<FormFactor>& column);
 
   // The elements whose radiosity changed since the last call (each once;
@@ -94,8 +98,10 @@ class Solver {
 
  private:
   glm::dvec3 ToShoot(int p) const;
-  double Power(int p, const glm::dvec3& ambient) const;
-  double Bound(int p) const;
+  double Power(int p, const glm::dvec3& ambient) const;  // one patch's
+  double ShooterPower(int p, const glm::dvec3& ambient) const;
+  double PatchBound(int p) const;
+  double Bound(int p) const;  // per shooter, for queue_
   void Rebase();
   void Changed(int32_t e) {
     if (!is_changed_[size_t(e)]) {
@@ -125,9 +131,11 @@ class Solver {
   std::vector<int> times_shot_;
   glm::dvec3 unshot_sum_{0.0};      // Σ unshot·area, kept incrementally
   double abs_sum_ = 0;              // Σ |unshot|·area (channels summed), too
-  ShooterQueue queue_;              // per patch: Bound(p), taken
+  ShooterQueue queue_;              // by patch id: Bound(p) of shooters, taken
   glm::dvec3 base_{0.0};            // the overshooting estimate the bounds assume
-  std::vector<double> weight_;      // per patch: area · max ρ, how far drift moves it
+  std::vector<double> weight_;      // per shooter: Σ area · max ρ, how far drift moves it
+  std::vector<uint8_t> group_dirty_;  // per group: in dirty_groups_
+  std::vector<int32_t> dirty_groups_; // groups a shot's light reached, for Shoot
   glm::dvec3 reflect_{1.0};         // 1/(1−ρ̄): ambient interreflection factor
   double total_area_ = 0, emitted_ = 0;
   long shots_ = 0;

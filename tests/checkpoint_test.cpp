@@ -135,15 +135,14 @@ TEST(Checkpoint, RoundTrip) {
   EXPECT_EQ(CompareOptions(a.options, b.options), "");
 }
 
-// Values written by the build before coding.h replaced the checkpoint's own
-// writer: format 1 is still written byte for byte (the trailing SHA-256
-// covers every byte before it), and the scene and mesh hashes a checkpoint
-// is checked against are unchanged, so old checkpoints still load.
-TEST(Checkpoint, BytesAndHashesAreThoseOfFormat1) {
+// Format 2 (format 1 plus the two group options, 9 bytes) pinned byte for
+// byte (the trailing SHA-256 covers every byte before it), and the scene
+// and mesh hashes a checkpoint is checked against are those format 1 had.
+TEST(Checkpoint, BytesAndHashesAreThoseOfFormat2) {
   const std::string bytes = EncodeCheckpoint(Filled());
-  EXPECT_EQ(bytes.size(), 597u);
+  EXPECT_EQ(bytes.size(), 606u);
   EXPECT_EQ(Hex(bytes.substr(bytes.size() - 32)),
-            "0a91553b9d285d013ba708070345f9854a55bf18e2f741a2d730fbf42e3ad1b4");
+            "f34bc114ccc9c4502115856a566fbd5ac58a7c98a636aa169b21ad012384f5b4");
   EXPECT_EQ(Hex(SceneHash(ShadowScene())),
             "e5ded178170e67915e7e2c974f2f76313e56922c54aa9ce557da0635a7ee8021");
   EXPECT_EQ(MeshHash(MakeMesh(ShadowScene(), ShadowMesh())), 0x4305479c346ad8daull);
@@ -181,9 +180,9 @@ TEST(Checkpoint, ForeignAndOtherVersionsAreRefused) {
   for (char& c : noise) c = char(rng());
   EXPECT_EQ(Error(noise), "not a radiosity checkpoint (no RADCKPT magic)");
   EXPECT_EQ(Error(""), "not a radiosity checkpoint (no RADCKPT magic)");
-  std::string v2 = EncodeCheckpoint(Filled());
-  v2[8] = 2;
-  EXPECT_EQ(Error(v2), "checkpoint format version 2, this radiosity reads 1");
+  std::string v1 = EncodeCheckpoint(Filled());
+  v1[8] = 1;
+  EXPECT_EQ(Error(v1), "checkpoint format version 1, this radiosity reads 2");
 }
 
 // An edited checkpoint, re-hashed so that its checksum holds: values no
@@ -234,6 +233,14 @@ TEST(Checkpoint, OptionsAreCompared) {
   b.mesh.patch_size = 0.5;
   EXPECT_EQ(CompareOptions(a, b), "--patch-size default (this run: 0.5)");
   b = a;
+  b.mesh.groups = false;
+  EXPECT_EQ(CompareOptions(a, b), "--no-groups not given (this run: given)");
+  b = a;
+  b.mesh.group_size = 0.5;
+  EXPECT_EQ(CompareOptions(a, b), "--group-size default (this run: 0.5)");
+  a.mesh.groups = b.mesh.groups = false;  // then the group size does not matter
+  EXPECT_EQ(CompareOptions(a, b), "");
+  a = b = SolveOptions();
   b.sub.max_level = 4;
   EXPECT_EQ(CompareOptions(a, b), "--max-level 2 (this run: 4)");
   a.subdivide = b.subdivide = false;  // then the subdivision limits do not matter

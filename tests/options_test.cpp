@@ -74,6 +74,8 @@ TEST(Options, Defaults) {
   EXPECT_EQ(o.mesh.patch_size, 0);
   EXPECT_EQ(o.mesh.elements_per_patch, 2);
   EXPECT_TRUE(o.mesh.join);
+  EXPECT_TRUE(o.mesh.groups);
+  EXPECT_EQ(o.mesh.group_size, 0);
   EXPECT_TRUE(o.subdivide);
   EXPECT_TRUE(o.sub.waves);
   EXPECT_EQ(o.sub.floor, 0.2);
@@ -95,8 +97,8 @@ TEST(Options, EveryValueOption) {
   const Options o = Parses({"-o", "res", "-j", "3", "--queue", "7", "--timeout", "2.5",
                          "--worker-cmd", "valgrind radiosity", "-r", "64", "-e", "1e-4", "-s",
                          "500", "-t", "12.5", "--no-overshoot", "--reference", "ref.csv",
-                         "--patch-size", "0.25", "--elements", "3", "--no-join",
-                         "--subdivide-floor", "0.3", "--min-element", "0.01",
+                         "--patch-size", "0.25", "--elements", "3", "--no-join", "--no-groups",
+                         "--group-size", "0.125", "--subdivide-floor", "0.3", "--min-element", "0.01",
                          "--max-level", "5", "--wave-fraction", "0.5", "--no-rotate", "--seed",
                          "42", "--log-every", "9", "--checkpoint", "ck", "--checkpoint-every",
                          "0.5", "--resume", "old", "--camera", "0 1 2 3 4 5 60", "--size",
@@ -119,6 +121,8 @@ TEST(Options, EveryValueOption) {
   EXPECT_FALSE(Parses({"--no-subdivide", "s.obj"}).subdivide);
   EXPECT_FALSE(Parses({"--no-waves", "s.obj"}).sub.waves);
   EXPECT_FALSE(o.mesh.join);
+  EXPECT_FALSE(o.mesh.groups);
+  EXPECT_EQ(o.mesh.group_size, 0.125);
   EXPECT_EQ(o.sub.floor, 0.3);
   EXPECT_EQ(o.sub.min_size, 0.01);
   EXPECT_EQ(o.sub.max_level, 5);
@@ -226,6 +230,7 @@ TEST(Options, BadNumbers) {
       {"-t", "0.001", "1e9", "0.0009", "2e9"},
       {"--patch-size", "1e-300", "1e300", "0", "1e301"},
       {"--elements", "1", "64", "0", "65"},
+      {"--group-size", "1e-300", "1e300", "0", "1e301"},
       {"--subdivide-floor", "0.001", "100", "0.0009", "101"},
       {"--min-element", "1e-300", "1e300", "0", "1e301"},
       {"--max-level", "0", "12", "-1", "13"},

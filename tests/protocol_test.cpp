@@ -36,6 +36,8 @@ std::string RawScene(const proto::SceneSetup& m) {
   WVar(&s, uint32_t(m.mesh.elements_per_patch));
   WF64(&s, m.mesh.patch_size);
   s += char(m.mesh.join);
+  s += char(m.mesh.groups);
+  WF64(&s, m.mesh.group_size);
   WF64(&s, m.heartbeat_s);
   WVec(&s, m.scene.lo);
   WVec(&s, m.scene.hi);
@@ -79,6 +81,7 @@ proto::SceneSetup TestSetup() {
   for (size_t i = 0; i < m.scene.faces.size(); ++i) m.scene.faces[i].index = int(3 * i + 1);
   m.mesh.patch_size = 0.45;
   m.mesh.elements_per_patch = 3;
+  m.mesh.group_size = 0.625;
   m.resolution = 128;
   m.rotate = 0;
   m.seed = 0xdeadbeef;
@@ -216,6 +219,8 @@ TEST(Protocol, SceneRoundTripsBitForBitAndRebuildsTheSameMesh) {
   EXPECT_EQ(d.seed, m.seed);
   EXPECT_EQ(Bits(d.heartbeat_s), Bits(m.heartbeat_s));
   EXPECT_EQ(Bits(d.mesh.patch_size), Bits(m.mesh.patch_size));
+  EXPECT_EQ(d.mesh.groups, m.mesh.groups);
+  EXPECT_EQ(Bits(d.mesh.group_size), Bits(m.mesh.group_size));
   EXPECT_EQ(d.mesh.elements_per_patch, m.mesh.elements_per_patch);
   EXPECT_EQ(d.mesh.join, m.mesh.join);
   for (int k = 0; k < 3; ++k) {
@@ -291,6 +296,11 @@ TEST(Protocol, SceneValuesOutOfRangeAreRefused) {
       {"patch size < 0", [](S* m) { m->mesh.patch_size = -0.5; }, false},
       {"patch size inf", [](S* m) { m->mesh.patch_size = HUGE_VAL; }, false},
       {"patch size nan", [](S* m) { m->mesh.patch_size = std::nan(""); }, false},
+      {"no groups", [](S* m) { m->mesh.groups = false; }, true},
+      {"group size 0", [](S* m) { m->mesh.group_size = 0; }, true},
+      {"group size 2", [](S* m) { m->mesh.group_size = 2; }, true},
+      {"group size < 0", [](S* m) { m->mesh.group_size = -1; }, false},
+      {"group size nan", [](S* m) { m->mesh.group_size = std::nan(""); }, false},
       {"heartbeat 1 ms", [](S* m) { m->heartbeat_s = 1e-3; }, true},
       {"heartbeat max", [](S* m) { m->heartbeat_s = proto::kMaxHeartbeat; }, true},
       {"heartbeat 0", [](S* m) { m->heartbeat_s = 0; }, false},
@@ -490,7 +500,7 @@ TEST(Protocol, HugeCountsFailFastWithoutAllocating) {
     sc += std::string(10, '\0');
     EXPECT_FALSE(proto::DecodeScene(sc, &d, &err));
     EXPECT_NE(err.find("face count"), std::string::npos) << err;
-    std::string mats = sc.substr(0, 73);  // fixed fields, then the material count
+    std::string mats = sc.substr(0, 82);  // fixed fields, then the material count
     WVar(&mats, n);
     EXPECT_FALSE(proto::DecodeScene(mats, &d, &err));
     EXPECT_NE(err.find("material count"), std::string::npos) << err;

@@ -66,12 +66,8 @@ TEST(Solver, ClosedBoxAbsorbsWhatItEmits) {
     Solver solver(m, over);
     ASSERT_EQ(Solve(m, &solver, 1e-6).status, RunStatus::kConverged);
     auto b = FaceRadiosity(m, solver.radiosity());
-    glm::dvec3 absorbed(0.0), emitted(0.0);
-    for (size_t f = 0; f < s.faces.size(); ++f) {
-      const Material& mat = s.materials[s.faces[f].material];
-      absorbed += s.faces[f].area * (1.0 - mat.kd) / mat.kd * (b[f] - mat.ke);
-      emitted += s.faces[f].area * mat.ke;
-    }
+    glm::dvec3 absorbed, emitted;
+    PowerBalance(s, b, &absorbed, &emitted);
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(absorbed[k], emitted[k], 0.01 * emitted[k]);
     for (const auto& e : solver.radiosity())
       for (int k = 0; k < 3; ++k) EXPECT_TRUE(std::isfinite(e[k]) && e[k] >= 0);

@@ -61,6 +61,18 @@ inline Scene Box(double size, std::vector<glm::dvec3> kd, std::vector<glm::dvec3
   return s;
 }
 
+// What a scene absorbs, Σ A (1−ρ)/ρ (B − Ke), and emits, Σ A Ke, per
+// channel, from its per-face radiosity b: equal when it is closed.
+inline void PowerBalance(const Scene& s, const std::vector<glm::dvec3>& b, glm::dvec3* absorbed,
+                         glm::dvec3* emitted) {
+  *absorbed = *emitted = glm::dvec3(0.0);
+  for (size_t f = 0; f < s.faces.size(); ++f) {
+    const Material& mat = s.materials[s.faces[f].material];
+    *absorbed += s.faces[f].area * (1.0 - mat.kd) / mat.kd * (b[f] - mat.ke);
+    *emitted += s.faces[f].area * mat.ke;
+  }
+}
+
 inline Mesh MakeMesh(const Scene& s, MeshOptions o = MeshOptions()) {
   Mesh m;
   std::string err;

@@ -1,0 +1,207 @@
+#include "groups.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "hemicube.h"
+#include "results.h"
+#include "scheduler.h"
+#include "solver.h"
+#include "test_util.h"
+
+namespace {
+
+// A square of side s at height y facing up (+y), corner (x, z).
+void Tile(Scene* s, double x, double y, double z, double side, glm::dvec3 kd) {
+  AddFace(s, {{x, y, z}, {x, y, z + side}, {x + side, y, z + side}, {x + side, y, z}}, kd,
+          glm::dvec3(0));
+}
+
+// The inside of the unit box, its floor cut into n x n tiles (the
+// exporter's facets), the ceiling the light. Patch size 0.5: the tiles are
+// small, the walls cut 2 x 2.
+Scene TiledBox(int n) {
+  Scene s = Box(1.0, {glm::dvec3(0.6), glm::dvec3(0.5), glm::dvec3(0.7), glm::dvec3(0.4),
+                      glm::dvec3(0.3), glm::dvec3(0.8, 0.5, 0.2)},
+                {glm::dvec3(0), glm::dvec3(10), glm::dvec3(0), glm::dvec3(0), glm::dvec3(0),
+                 glm::dvec3(0)});
+  s.faces.erase(s.faces.begin());  // the floor, cut below instead
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      Tile(&s, double(i) / n, 0, double(j) / n, 1.0 / n, glm::dvec3(0.5 + 0.02 * ((i + j) % 3)));
+  for (size_t f = 0; f < s.faces.size(); ++f) s.faces[f].index = int(f);
+  return s;
+}
+
+MeshOptions Half() {
+  MeshOptions o;
+  o.patch_size = 0.5;
+  return o;
+}
+
+bool Grouped(const Mesh& m, int a, int b) {
+  return m.group_of[a] >= 0 && m.group_of[a] == m.group_of[b];
+}
+
+TEST(Groups, TilesOfOneFloorShootTogether) {
+  const Mesh m = MakeMesh(TiledBox(10), Half());
+  // Cells of 0.5 over the floor, 25 tiles in each, and groups no wider than
+  // 0.5 across (3 x 4 tiles of 0.1 at most), formed greedily in tile
+  // order: 12 groups hold all tiles but 4. Nothing else is small.
+  ASSERT_EQ(m.groups.size(), 12u);
+  size_t members = 0;
+  for (const PatchGroup& g : m.groups) {
+    EXPECT_GE(g.members.size(), 2u);
+    EXPECT_LE(g.members.size(), 12u);
+    members += g.members.size();
+    glm::dvec3 lo(1e9), hi(-1e9);
+    for (int q : g.members)
+      for (int e : m.patches[q].elements)
+        for (int k = 0; k < 4; ++k) {
+          lo = glm::min(lo, m.verts[m.elems[e].v[k]]);
+          hi = glm::max(hi, m.verts[m.elems[e].v[k]]);
+        }
+    EXPECT_LE(glm::length(hi - lo), 0.5 + 1e-12);
+    EXPECT_NEAR(g.area, 0.01 * double(g.members.size()), 1e-12);
+    EXPECT_NEAR(g.normal.y, 1.0, 1e-12);
+    EXPECT_NEAR(g.center.y, 0.0, 1e-12);
+    EXPECT_TRUE(std::is_sorted(g.members.begin(), g.members.end()));
+    EXPECT_TRUE(IsShooter(m, g.members[0]));
+    EXPECT_FALSE(IsShooter(m, g.members[1]));
+  }
+  EXPECT_EQ(members, 96u);  // 4 tiles left alone
+  EXPECT_EQ(Shooters(m), m.patches.size() - members + m.groups.size());
+  // The same groups every time (a worker derives them alike), none when off.
+  EXPECT_EQ(MakeMesh(TiledBox(10), Half()).group_of, m.group_of);
+  MeshOptions off = Half();
+  off.groups = false;
+  const Mesh alone = MakeMesh(TiledBox(10), off);
+  EXPECT_TRUE(alone.groups.empty());
+  EXPECT_EQ(Shooters(alone), alone.patches.size());
+}
+
+// A group's shot: the members give up exactly their unshot power, what the
+// receivers gain is ρ·ΣxA·F, and no member receives from its own group.
+TEST(Groups, AGroupShotKeepsEnergyExactly) {
+  const Mesh m = MakeMesh(TiledBox(10), Half());
+  Solver solver(m, false);
+  Hemicube hc(64);
+  std::vector<FormFactor> col;
+  auto unshot_power = [&] {
+    glm::dvec3 u(0.0);
+    for (size_t p = 0; p < m.patches.size(); ++p) u += solver.unshot()[p] * m.patches[p].area;
+    return u;
+  };
+  // The light and the walls first, until a group of the lit floor comes up.
+  int p = solver.Select();
+  for (int shots = 0; !GroupOf(m, p) && shots < 40; ++shots, p = solver.Select()) {
+    ShotColumn(&hc, m, p, 0, true, 1, &col);
+    solver.Shoot(p, col);
+  }
+  const PatchGroup* g = GroupOf(m, p);
+  ASSERT_NE(g, nullptr);
+  glm::dvec3 xa(0.0);
+  for (int q : g->members) xa += solver.unshot()[q] * m.patches[q].area;
+  ShotColumn(&hc, m, p, 0, true, 1, &col);
+  ASSERT_FALSE(col.empty());
+  glm::dvec3 gain(0.0);
+  for (const FormFactor& ff : col) {
+    EXPECT_NE(m.group_of[m.elems[ff.elem].patch], m.group_of[p]) << "a member received";
+    gain += m.FaceOf(ff.elem).rho * xa * double(ff.f);
+  }
+  const glm::dvec3 before = unshot_power();
+  solver.Shoot(p, col);
+  for (int q : g->members) EXPECT_EQ(solver.unshot()[q], glm::dvec3(0.0)) << q;
+  const glm::dvec3 after = unshot_power();
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(after[k], before[k] - xa[k] + gain[k], 1e-12 * before[k]);
+  EXPECT_EQ(solver.TimesShot(p), 1);
+  EXPECT_EQ(solver.TimesShot(g->members[1]), 0);
+}
+
+// The closed box with its tiled floor: what is absorbed is what is emitted,
+// with groups as without, and the answers agree per face.
+TEST(Groups, ClosedBoxAbsorbsWhatItEmitsWithGroups) {
+  const Scene s = TiledBox(10);
+  std::vector<glm::dvec3> with, without;
+  for (bool groups : {true, false}) {
+    MeshOptions o = Half();
+    o.groups = groups;
+    Mesh m = MakeMesh(s, o);
+    ASSERT_EQ(m.groups.empty(), !groups);
+    Solver solver(m, true);
+    RunOptions ro;
+    ro.resolution = 64;
+    ro.epsilon = 1e-6;
+    ASSERT_EQ(RunSequential(&m, ro, &solver, nullptr, nullptr).status, RunStatus::kConverged);
+    const auto b = FaceRadiosity(m, solver.radiosity());
+    glm::dvec3 absorbed, emitted;
+    PowerBalance(s, b, &absorbed, &emitted);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(absorbed[k], emitted[k], 0.01 * emitted[k]);
+    (groups ? with : without) = b;
+  }
+  double rms, rel;
+  RmsError(s, with, without, &rms, &rel);
+  EXPECT_LT(rel, 0.01);
+}
+
+// Small tiles in pairs: which pairs may shoot together.
+TEST(Groups, NeverAcrossAWallNorFacingAwayNorOneBehindTheOther) {
+  const glm::dvec3 grey(0.5);
+  Scene s = EmptyScene();
+  // A room for scale (patch size 0.5 over a 4-unit scene): a big floor far below.
+  AddFace(&s, {{-2, -1, -2}, {-2, -1, 2}, {2, -1, 2}, {2, -1, -2}}, grey, glm::dvec3(0));
+  auto pair = [&](std::vector<glm::dvec3> a, std::vector<glm::dvec3> b) {
+    AddFace(&s, a, grey, glm::dvec3(0));
+    AddFace(&s, b, grey, glm::dvec3(0));
+    return int(s.faces.size()) - 2;
+  };
+  // Side by side, coplanar, facing up: together.
+  const int plain = pair({{0.0, 0, 0}, {0.0, 0, 0.1}, {0.1, 0, 0.1}, {0.1, 0, 0}},
+                         {{0.2, 0, 0}, {0.2, 0, 0.1}, {0.3, 0, 0.1}, {0.3, 0, 0}});
+  // The same 1 unit over, with a thin two-sided wall between them.
+  const int walled = pair({{1.0, 0, 0}, {1.0, 0, 0.1}, {1.1, 0, 0.1}, {1.1, 0, 0}},
+                          {{1.2, 0, 0}, {1.2, 0, 0.1}, {1.3, 0, 0.1}, {1.3, 0, 0}});
+  AddFace(&s, {{1.15, 0, -0.1}, {1.15, 0.2, -0.1}, {1.15, 0.2, 0.2}, {1.15, 0, 0.2}}, grey,
+          glm::dvec3(0));
+  AddFace(&s, {{1.15, 0, -0.1}, {1.15, 0, 0.2}, {1.15, 0.2, 0.2}, {1.15, 0.2, -0.1}}, grey,
+          glm::dvec3(0));
+  // Back to back: one up, one down, side by side.
+  const int away = pair({{0.0, 0, 1.0}, {0.0, 0, 1.1}, {0.1, 0, 1.1}, {0.1, 0, 1.0}},
+                        {{0.2, 0, 1.0}, {0.3, 0, 1.0}, {0.3, 0, 1.1}, {0.2, 0, 1.1}});
+  // Facing each other: a tile over a tile, the upper one facing down.
+  const int facing = pair({{1.0, 0, 1.0}, {1.0, 0, 1.1}, {1.1, 0, 1.1}, {1.1, 0, 1.0}},
+                          {{1.0, 0.1, 1.0}, {1.1, 0.1, 1.0}, {1.1, 0.1, 1.1}, {1.0, 0.1, 1.1}});
+  // Both up, one a step (0.1, more than 0.5/16) above the other: one behind
+  // the other's plane.
+  const int step = pair({{0.0, 0, -1.0}, {0.0, 0, -0.9}, {0.1, 0, -0.9}, {0.1, 0, -1.0}},
+                        {{0.2, 0.1, -1.0}, {0.2, 0.1, -0.9}, {0.3, 0.1, -0.9}, {0.3, 0.1, -1.0}});
+  // Both up, 0.01 apart in height: near-coplanar, together.
+  const int near = pair({{1.0, 0, -1.0}, {1.0, 0, -0.9}, {1.1, 0, -0.9}, {1.1, 0, -1.0}},
+                        {{1.2, 0.01, -1.0}, {1.2, 0.01, -0.9}, {1.3, 0.01, -0.9}, {1.3, 0.01, -1.0}});
+  // Tilted 40 degrees against each other (roof-like, both facing out): apart.
+  const double c = std::cos(40 * M_PI / 180) * 0.1, h = std::sin(40 * M_PI / 180) * 0.1;
+  const int tilted =
+      pair({{-1.0, 0.2, 0.0}, {-1.0, 0.2, 0.1}, {-0.9, 0.2, 0.1}, {-0.9, 0.2, 0.0}},
+           {{-0.9, 0.2, 0.0}, {-0.9, 0.2, 0.1}, {-0.9 + c, 0.2 - h, 0.1}, {-0.9 + c, 0.2 - h, 0.0}});
+  for (size_t f = 0; f < s.faces.size(); ++f) s.faces[f].index = int(f);
+  MeshOptions o;
+  o.patch_size = 0.5;
+  const Mesh m = MakeMesh(s, o);
+  // One patch per small face, in face order after the floor's 8 x 8.
+  auto patch = [&](int face) { return m.faces[face].patches.at(0); };
+  auto together = [&](int first) { return Grouped(m, patch(first), patch(first + 1)); };
+  EXPECT_TRUE(together(plain));
+  EXPECT_FALSE(together(walled));
+  EXPECT_FALSE(together(away));
+  EXPECT_FALSE(together(facing));
+  EXPECT_FALSE(together(step));
+  EXPECT_TRUE(together(near));
+  EXPECT_FALSE(together(tilted));
+  // The wall's own two faces face away from each other.
+  EXPECT_FALSE(Grouped(m, patch(walled + 2), patch(walled + 3)));
+  // The big floor is no candidate: its patches are as large as the cell.
+  EXPECT_EQ(m.group_of[patch(0)], -1);
+}
+
+}  // namespace
