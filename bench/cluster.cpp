@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/load.h"
 #include "mesh.h"
 #include "scene.h"
 #include "scheduler.h"
@@ -34,12 +35,7 @@ int main(int argc, char** argv) {
   if (counts.empty()) counts = {8, 32, 64, 128};
   Scene scene;
   Mesh mesh;
-  std::string err;
-  std::vector<std::string> warnings;
-  if (!LoadScene(argv[1], &scene, &err, &warnings) || !BuildMesh(scene, MeshOptions(), &mesh, &err)) {
-    std::fprintf(stderr, "radiosity-cluster: %s\n", err.c_str());
-    return 1;
-  }
+  LoadMeshOrDie("radiosity-cluster", argv[1], &scene, &mesh);
   std::string name = argv[1];
   name = name.substr(name.find_last_of('/') + 1);
   for (double bps : {1e9, 1e10}) {

@@ -19,6 +19,7 @@
 
 #include "clock.h"
 #include "hemicube.h"
+#include "bench/load.h"
 #include "mesh.h"
 #include "protocol.h"
 #include "scene.h"
@@ -41,12 +42,8 @@ int main(int argc, char** argv) {
   }
   Scene scene;
   Mesh mesh;
+  LoadMeshOrDie("radiosity-master", argv[1], &scene, &mesh);
   std::string err;
-  std::vector<std::string> warnings;
-  if (!LoadScene(argv[1], &scene, &err, &warnings) || !BuildMesh(scene, MeshOptions(), &mesh, &err)) {
-    std::fprintf(stderr, "radiosity-master: %s\n", err.c_str());
-    return 1;
-  }
   const long patches = long(mesh.patches.size()), built = long(mesh.elems.size());
   // First the columns, in the order the run shoots them (a worker's work,
   // not timed); then the master's work alone on them, three times on

@@ -38,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/load.h"
 #include "check.h"
 #include "hemicube.h"
 #include "mesh.h"
@@ -68,11 +69,7 @@ SceneData Load(const std::string& name) {
   SceneData s;
   s.name = name;
   s.path = "scenes/" + name + ".obj";
-  std::string err;
-  std::vector<std::string> warnings;
-  if (!LoadScene(s.path, &s.scene, &err, &warnings) ||
-      !BuildMesh(s.scene, MeshOptions(), &s.mesh, &err))
-    Die(err);
+  LoadMeshOrDie("radiosity-parallel", s.path, &s.scene, &s.mesh);
   return s;
 }
 
