@@ -177,6 +177,16 @@ MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts);
 // 200,709-face scene by bench/stiff.sh), so this is about 9 GB.
 constexpr int kMaxElements = 8'000'000;
 
+// Geometry shared by building (mesh.cpp) and division (divide.cpp).
+// Lexicographic order of points: which end of an edge is "first".
+bool LexLess(const glm::dvec3& a, const glm::dvec3& b);
+// The point k/n of the way from p to q, computed from the lexicographically
+// smaller endpoint so that a face walking the edge the other way gets the
+// bit-identical point (no hemicube cracks between faces cut alike).
+glm::dvec3 EdgePoint(const glm::dvec3& p, const glm::dvec3& q, int k, int n);
+// The area of element e from its corners.
+double ElementArea(const Mesh& m, const Element& e);
+
 // Divides leaf element `elem` into kChildren children appended to
 // mesh->elems. Midpoints are computed from their edge's endpoints in the
 // canonical order (bit-identical from either side, and to a neighbouring
