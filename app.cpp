@@ -121,7 +121,7 @@ ExitStatus WorkerMain(const Options& opts) {
     if (in < 0) Die(kExitFailure, "worker: " + err);
   }
   const int status = RunWorker(in, out, &err);
-  if (status != kExitOk) std::fprintf(stderr, "radiosity: worker: %s\n", err.c_str());
+  if (status != kExitOk) Say("worker: " + err);
   return ExitStatus(status);
 }
 
@@ -204,8 +204,7 @@ void MasterRun::Build() {
       [](const std::string& text) { std::fputs(text.c_str(), stderr); }, terminal, run_.epsilon,
       terminal ? 0.25 : 2.0);
   if (solver_->Dark())  // a legal scene, but most likely a missing Ke
-    std::fprintf(stderr, "radiosity: warning: %s: no face emits light (Ke); every B is 0\n",
-                 opts_.scene_path.c_str());
+    Say("warning: " + opts_.scene_path + ": no face emits light (Ke); every B is 0");
   run_.wave_end = [this](int wave) {
     Picture({FrameName(wave)});
     if (opts_.verbosity >= 2)
@@ -294,7 +293,7 @@ void MasterRun::StartWorkers() {
     if (conn)
       pool->Add(std::move(conn), name + " (pid " + std::to_string(pid) + ")");
     else
-      std::fprintf(stderr, "radiosity: %s: %s\n", name.c_str(), err.c_str());
+      Say(name + ": " + err);
   }
   auto note = [this](const std::string& line, bool warning) { Note(line, warning); };
   if (!ssh_hosts.empty()) {
@@ -323,7 +322,7 @@ void MasterRun::Resume() {
   run_.resume = &resume_.run;
   if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: resumed from %s: %ld shots, wave %d, %ld elements\n",
-                 opts_.resume_file.c_str(), solver_->shots(), resume_.run.wave, mesh_.LeafCount());
+                 Printable(opts_.resume_file).c_str(), solver_->shots(), resume_.run.wave, mesh_.LeafCount());
 }
 
 void MasterRun::SaveCheckpoint(const RunState& state) {
@@ -333,10 +332,10 @@ void MasterRun::SaveCheckpoint(const RunState& state) {
   const Checkpoint c =
       Capture(identity_, mesh_, *solver_, subdivider_.get(), state, log_.text());
   if (!WriteCheckpoint(opts_.checkpoint_file, c, &bytes, &err))
-    std::fprintf(stderr, "radiosity: warning: checkpoint not written: %s\n", err.c_str());
+    Say("warning: checkpoint not written: " + err);
   else if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: checkpoint %s: %zu bytes at %ld shots in %.1f ms\n",
-                 opts_.checkpoint_file.c_str(), bytes, solver_->shots(),
+                 Printable(opts_.checkpoint_file).c_str(), bytes, solver_->shots(),
                  (MonotonicSeconds() - t0) * 1e3);
 }
 
@@ -445,7 +444,7 @@ void MasterRun::WriteOutputs() {
     if (!WriteResultCsv(opts_.converge, scene_, face_b, &err)) Die(kExitFailure, err);
     if (opts_.verbosity >= 1)
       std::fprintf(stderr, "radiosity: reference (epsilon %g) in %s: use --reference %s\n",
-                   run_.epsilon, opts_.converge.c_str(), opts_.converge.c_str());
+                   run_.epsilon, Printable(opts_.converge).c_str(), Printable(opts_.converge).c_str());
   }
   commit();
 
@@ -467,6 +466,6 @@ void MasterRun::WriteOutputs() {
                  "in %.3f s; %zu shooters, %zu of them groups); results in %s/\n",
                  how.c_str(), r.shots, r.seconds, r.unshot, mesh_.patches.size(), mesh_.LeafCount(),
                  built_, r.waves, r.passes, r.subdivide_s, Shooters(mesh_), mesh_.groups.size(),
-                 out.c_str());
+                 Printable(out).c_str());
   }
 }
