@@ -505,6 +505,22 @@ TEST(Scene, RepeatedVerticesAreAZeroAreaFace) {
   EXPECT_EQ(r.err, only + ": no faces left (1 zero-area faces skipped)");
 }
 
+TEST(Scene, VertexCoordinateErrors) {
+  ExpectError("v 0 0 0\nv 1 nan 0\n", 2, "v: 'nan' is not a finite number");
+  ExpectError("v 0 0 0\nv 1 0 NaN\n", 2, "not a finite number");
+  ExpectError("v inf 0 0\n", 1, "'inf' is not a finite number");
+  ExpectError("v -infinity 0 0\n", 1, "not a finite number");
+  ExpectError("v 1e999 0 0\n", 1, "'1e999' is out of range");
+  ExpectError("v 0 -1e400 0\n", 1, "out of range");
+  ExpectError("v 0 abc 0\n", 1, "'abc' is not a number");
+  ExpectError("v 0 1,5 0\n", 1, "'1,5' is not a number");
+  ExpectError("v 0 1.5.2 0\n", 1, "not a number");
+  ExpectError("v 0 0\n", 1, "expected 3 coordinates (and an optional w), got 2");
+  ExpectError("v\n", 1, "got 0");
+  ExpectError("v 0 0 0 1 5\n", 1, "got 5");
+  ExpectError("v 0 0 0 w\n", 1, "'w' is not a number");
+}
+
 // An error about a file names it whole (issue 16: a long mtllib path was
 // cut in the middle, losing the missing file's own name).
 TEST(Scene, LongFileNamesAreWhole) {
