@@ -55,15 +55,16 @@ void Say(const std::string& line) { std::fprintf(stderr, "radiosity: %s\n", Prin
 // The names of a run's outputs in its directory: what a run replaces, and
 // removes when it did not write it this time (man page, FILES).
 bool OutputName(const std::string& name) {
-  static const char* const kNames[] = {"log.csv",    "error.svg",   "result.csv", "result.ply",
-                                       "result.gltf", "result.bin", "final.png",  "final.ppm"};
+  static const char* const kNames[] = {"log.csv",    "error.svg",  "result.csv", "result.ply",
+                                       "result.gltf", "result.bin", "final.png",  "final.ppm",
+                                       "final.exr",   "final.hdr"};
   for (const char* n : kNames)
     if (name == n) return true;
-  // frame-NN.png or .ppm, NN two or more digits
+  // frame-NN.png, .ppm or .exr, NN two or more digits
   const size_t dot = name.rfind('.');
   if (name.compare(0, 6, "frame-") != 0 || dot == std::string::npos || dot < 8) return false;
   const std::string ext = name.substr(dot);
-  return (ext == ".png" || ext == ".ppm") &&
+  return (ext == ".png" || ext == ".ppm" || ext == ".exr") &&
          std::all_of(name.begin() + 6, name.begin() + long(dot), [](char c) { return c >= '0' && c <= '9'; });
 }
 
@@ -236,7 +237,7 @@ void MasterRun::CheckOutputs(const std::vector<Input>& ck_inputs) {
   };
   if (!MakeDirs(opts_.out_dir, &err)) Die(kExitFailure, err);
   for (const char* n : {"log.csv", "error.svg", "result.csv", "result.ply", "result.gltf",
-                        "result.bin"})
+                        "result.bin", "final.hdr"})
     check("", opts_.out_dir + "/" + n, inputs_);
   check("", opts_.out_dir + "/final." + opts_.format, inputs_);
   if (!opts_.converge.empty()) check("--converge ", opts_.converge, inputs_);
@@ -367,8 +368,10 @@ std::string MasterRun::FrameName(int wave) const {
 
 // A picture of the solution as it stands: the end of a wave, the final one.
 // The last wave's frame and final.png are the same picture: shaded and
-// rendered once (on a 200,000-face scene each costs seconds).
-std::pair<ShadedMesh, float> MasterRun::Picture(const std::vector<std::string>& paths) {
+// rendered once (on a 200,000-face scene each costs seconds). HDR_PATH:
+// also the linear picture there, as Radiance RGBE.
+std::pair<ShadedMesh, float> MasterRun::Picture(const std::vector<std::string>& paths,
+                                                const std::string& hdr_path) {
   std::string err;
   ShadedMesh shaded = Shade(mesh_, solver_->radiosity());
   Image img;
@@ -376,6 +379,7 @@ std::pair<ShadedMesh, float> MasterRun::Picture(const std::vector<std::string>& 
   const float exposure = AutoExposure(shaded);
   for (const std::string& path : paths)
     if (!WriteImage(img, exposure, path, opts_.format, &err)) Die(kExitFailure, err);
+  if (!hdr_path.empty() && !WriteRadianceHdr(img, hdr_path, &err)) Die(kExitFailure, err);
   return std::make_pair(std::move(shaded), exposure);
 }
 
@@ -426,7 +430,8 @@ void MasterRun::WriteOutputs() {
 
   const std::vector<glm::dvec3> face_b = FaceRadiosity(mesh_, solver_->radiosity());
   if (!WriteResultCsv(staging_.Path("result.csv"), scene_, face_b, &err)) Die(kExitFailure, err);
-  const auto shaded = Picture({FrameName(r.waves), staging_.Path("final." + opts_.format)});
+  const auto shaded = Picture({FrameName(r.waves), staging_.Path("final." + opts_.format)},
+                              staging_.Path("final.hdr"));
   if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", r.waves, mesh_.LeafCount());
   if (!WritePly(shaded.first, shaded.second, staging_.Path("result.ply"), &err) ||
