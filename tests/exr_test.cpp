@@ -7,6 +7,8 @@
 #include <stb_image.h>
 #include <tinyexr.h>
 
+#include <signal.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -157,12 +159,18 @@ TEST(Exr, FinalPicturesMatchResultCsvOnAFlatLitFace) {
   Options opts;
   std::string err;
   ASSERT_EQ(ParseOptions(int(args.size()), argv.data(), &opts, &err), Parsed::kRun) << err;
+  // The run takes SIGINT, SIGTERM and SIGHUP and ignores SIGPIPE, as main's
+  // does; the test process gets its own handlers back after it.
+  const int kSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
+  struct sigaction saved[4];
+  for (int i = 0; i < 4; ++i) sigaction(kSignals[i], nullptr, &saved[i]);
   {
     MasterRun run(opts);
     run.Build();
     run.Run();
     run.WriteOutputs();
   }
+  for (int i = 0; i < 4; ++i) sigaction(kSignals[i], &saved[i], nullptr);
   const glm::vec3 b = CsvRadiosity(out + "/result.csv", 0);
   EXPECT_EQ(b, glm::vec3(0.5f, 2.0f, 7.0f));
   EXPECT_FALSE(std::filesystem::exists(out + "/final.png"));
