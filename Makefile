@@ -7,7 +7,8 @@ PKGS     := glm stb libssh libcrypto
 OPTFLAGS ?= -O2 -g
 CXXFLAGS += $(OPTFLAGS) -std=c++17 -Wall -Wextra -MMD -MP
 CPPFLAGS += $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
-LDLIBS   += $(shell pkg-config --libs $(PKGS) 2>/dev/null) -lpthread
+# tinyexr (--format exr) has no pkg-config file: a header and one library.
+LDLIBS   += $(shell pkg-config --libs $(PKGS) 2>/dev/null) -ltinyexr -lpthread
 B        ?= build
 PROG     ?= radiosity
 NPROC    := $(shell nproc 2>/dev/null || echo 1)
@@ -18,7 +19,7 @@ NPROC    := $(shell nproc 2>/dev/null || echo 1)
 SAN      := -O1 -g1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := options.cpp app.cpp clock.cpp scene.cpp surface.cpp mesh.cpp divide.cpp groups.cpp hemicube.cpp subdivide.cpp solver.cpp shooters.cpp scheduler.cpp results.cpp image.cpp coding.cpp ffcodec.cpp protocol.cpp version.cpp inprocess.cpp pool.cpp worker.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp files.cpp memory.cpp
+LIB_SRCS  := options.cpp app.cpp clock.cpp scene.cpp surface.cpp mesh.cpp divide.cpp groups.cpp hemicube.cpp subdivide.cpp solver.cpp shooters.cpp scheduler.cpp results.cpp image.cpp exr.cpp coding.cpp ffcodec.cpp protocol.cpp version.cpp inprocess.cpp pool.cpp worker.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp files.cpp memory.cpp
 # Only for the unit tests and the benchmarks, never in the program.
 SIM_SRCS  := sim.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)
@@ -95,7 +96,7 @@ asan:
 demo: deps
 	@$(MAKE) --no-print-directory radiosity
 	./radiosity -o out/cornell scenes/cornell.obj
-	@echo "pictures and results: $(CURDIR)/out/cornell (final.png, frame-NN.png per wave, error.svg, result.csv, log.csv, result.ply, result.gltf)"
+	@echo "pictures and results: $(CURDIR)/out/cornell (final.png, final.hdr, frame-NN.png per wave, error.svg, result.csv, log.csv, result.ply, result.gltf)"
 
 bench: deps
 	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \

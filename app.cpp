@@ -55,15 +55,16 @@ void Say(const std::string& line) { std::fprintf(stderr, "radiosity: %s\n", Prin
 // The names of a run's outputs in its directory: what a run replaces, and
 // removes when it did not write it this time (man page, FILES).
 bool OutputName(const std::string& name) {
-  static const char* const kNames[] = {"log.csv",    "error.svg",   "result.csv", "result.ply",
-                                       "result.gltf", "result.bin", "final.png",  "final.ppm"};
+  static const char* const kNames[] = {"log.csv",    "error.svg",  "result.csv", "result.ply",
+                                       "result.gltf", "result.bin", "final.png",  "final.ppm",
+                                       "final.exr",   "final.hdr"};
   for (const char* n : kNames)
     if (name == n) return true;
-  // frame-NN.png or .ppm, NN two or more digits
+  // frame-NN.png, .ppm or .exr, NN two or more digits
   const size_t dot = name.rfind('.');
   if (name.compare(0, 6, "frame-") != 0 || dot == std::string::npos || dot < 8) return false;
   const std::string ext = name.substr(dot);
-  return (ext == ".png" || ext == ".ppm") &&
+  return (ext == ".png" || ext == ".ppm" || ext == ".exr") &&
          std::all_of(name.begin() + 6, name.begin() + long(dot), [](char c) { return c >= '0' && c <= '9'; });
 }
 
@@ -121,7 +122,7 @@ ExitStatus WorkerMain(const Options& opts) {
     if (in < 0) Die(kExitFailure, "worker: " + err);
   }
   const int status = RunWorker(in, out, &err);
-  if (status != kExitOk) std::fprintf(stderr, "radiosity: worker: %s\n", err.c_str());
+  if (status != kExitOk) Say("worker: " + err);
   return ExitStatus(status);
 }
 
@@ -204,8 +205,7 @@ void MasterRun::Build() {
       [](const std::string& text) { std::fputs(text.c_str(), stderr); }, terminal, run_.epsilon,
       terminal ? 0.25 : 2.0);
   if (solver_->Dark())  // a legal scene, but most likely a missing Ke
-    std::fprintf(stderr, "radiosity: warning: %s: no face emits light (Ke); every B is 0\n",
-                 opts_.scene_path.c_str());
+    Say("warning: " + opts_.scene_path + ": no face emits light (Ke); every B is 0");
   run_.wave_end = [this](int wave) {
     Picture({FrameName(wave)});
     if (opts_.verbosity >= 2)
@@ -237,7 +237,7 @@ void MasterRun::CheckOutputs(const std::vector<Input>& ck_inputs) {
   };
   if (!MakeDirs(opts_.out_dir, &err)) Die(kExitFailure, err);
   for (const char* n : {"log.csv", "error.svg", "result.csv", "result.ply", "result.gltf",
-                        "result.bin"})
+                        "result.bin", "final.hdr"})
     check("", opts_.out_dir + "/" + n, inputs_);
   check("", opts_.out_dir + "/final." + opts_.format, inputs_);
   if (!opts_.converge.empty()) check("--converge ", opts_.converge, inputs_);
@@ -294,7 +294,7 @@ void MasterRun::StartWorkers() {
     if (conn)
       pool->Add(std::move(conn), name + " (pid " + std::to_string(pid) + ")");
     else
-      std::fprintf(stderr, "radiosity: %s: %s\n", name.c_str(), err.c_str());
+      Say(name + ": " + err);
   }
   auto note = [this](const std::string& line, bool warning) { Note(line, warning); };
   if (!ssh_hosts.empty()) {
@@ -323,7 +323,7 @@ void MasterRun::Resume() {
   run_.resume = &resume_.run;
   if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: resumed from %s: %ld shots, wave %d, %ld elements\n",
-                 opts_.resume_file.c_str(), solver_->shots(), resume_.run.wave, mesh_.LeafCount());
+                 Printable(opts_.resume_file).c_str(), solver_->shots(), resume_.run.wave, mesh_.LeafCount());
 }
 
 void MasterRun::SaveCheckpoint(const RunState& state) {
@@ -333,10 +333,10 @@ void MasterRun::SaveCheckpoint(const RunState& state) {
   const Checkpoint c =
       Capture(identity_, mesh_, *solver_, subdivider_.get(), state, log_.text());
   if (!WriteCheckpoint(opts_.checkpoint_file, c, &bytes, &err))
-    std::fprintf(stderr, "radiosity: warning: checkpoint not written: %s\n", err.c_str());
+    Say("warning: checkpoint not written: " + err);
   else if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: checkpoint %s: %zu bytes at %ld shots in %.1f ms\n",
-                 opts_.checkpoint_file.c_str(), bytes, solver_->shots(),
+                 Printable(opts_.checkpoint_file).c_str(), bytes, solver_->shots(),
                  (MonotonicSeconds() - t0) * 1e3);
 }
 
@@ -368,8 +368,10 @@ std::string MasterRun::FrameName(int wave) const {
 
 // A picture of the solution as it stands: the end of a wave, the final one.
 // The last wave's frame and final.png are the same picture: shaded and
-// rendered once (on a 200,000-face scene each costs seconds).
-std::pair<ShadedMesh, float> MasterRun::Picture(const std::vector<std::string>& paths) {
+// rendered once (on a 200,000-face scene each costs seconds). HDR_PATH:
+// also the linear picture there, as Radiance RGBE.
+std::pair<ShadedMesh, float> MasterRun::Picture(const std::vector<std::string>& paths,
+                                                const std::string& hdr_path) {
   std::string err;
   ShadedMesh shaded = Shade(mesh_, solver_->radiosity());
   Image img;
@@ -377,6 +379,7 @@ std::pair<ShadedMesh, float> MasterRun::Picture(const std::vector<std::string>& 
   const float exposure = AutoExposure(shaded);
   for (const std::string& path : paths)
     if (!WriteImage(img, exposure, path, opts_.format, &err)) Die(kExitFailure, err);
+  if (!hdr_path.empty() && !WriteRadianceHdr(img, hdr_path, &err)) Die(kExitFailure, err);
   return std::make_pair(std::move(shaded), exposure);
 }
 
@@ -427,7 +430,8 @@ void MasterRun::WriteOutputs() {
 
   const std::vector<glm::dvec3> face_b = FaceRadiosity(mesh_, solver_->radiosity());
   if (!WriteResultCsv(staging_.Path("result.csv"), scene_, face_b, &err)) Die(kExitFailure, err);
-  const auto shaded = Picture({FrameName(r.waves), staging_.Path("final." + opts_.format)});
+  const auto shaded = Picture({FrameName(r.waves), staging_.Path("final." + opts_.format)},
+                              staging_.Path("final.hdr"));
   if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", r.waves, mesh_.LeafCount());
   if (!WritePly(shaded.first, shaded.second, staging_.Path("result.ply"), &err) ||
@@ -445,7 +449,7 @@ void MasterRun::WriteOutputs() {
     if (!WriteResultCsv(opts_.converge, scene_, face_b, &err)) Die(kExitFailure, err);
     if (opts_.verbosity >= 1)
       std::fprintf(stderr, "radiosity: reference (epsilon %g) in %s: use --reference %s\n",
-                   run_.epsilon, opts_.converge.c_str(), opts_.converge.c_str());
+                   run_.epsilon, Printable(opts_.converge).c_str(), Printable(opts_.converge).c_str());
   }
   commit();
 
@@ -467,6 +471,6 @@ void MasterRun::WriteOutputs() {
                  "in %.3f s; %zu shooters, %zu of them groups); results in %s/\n",
                  how.c_str(), r.shots, r.seconds, r.unshot, mesh_.patches.size(), mesh_.LeafCount(),
                  built_, r.waves, r.passes, r.subdivide_s, Shooters(mesh_), mesh_.groups.size(),
-                 out.c_str());
+                 Printable(out).c_str());
   }
 }

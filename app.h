@@ -58,8 +58,10 @@ class MasterRun {
   void OnSample(const Sample& s);
   void Note(const std::string& line, bool warning);
   std::string FrameName(int wave) const;
-  // Renders the solution once and writes it to every path.
-  std::pair<ShadedMesh, float> Picture(const std::vector<std::string>& paths);
+  // Renders the solution once and writes it to every path (and to
+  // hdr_path as Radiance RGBE, if given).
+  std::pair<ShadedMesh, float> Picture(const std::vector<std::string>& paths,
+                                       const std::string& hdr_path = "");
   void SaveCheckpoint(const RunState& state);
 
   const Options& opts_;

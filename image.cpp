@@ -1,6 +1,7 @@
 // Pictures of a solved mesh: a small software rasteriser (z-buffer,
 // frustum clipping, back-face culling, perspective-correct Gouraud), the
-// exposure rule, 8-bit sRGB encoding, and the PNG, PPM and PLY writers.
+// exposure rule, 8-bit sRGB encoding, the PNG, PPM and PLY writers, and
+// the Radiance RGBE one (the OpenEXR one is exr.cpp's).
 #include "image.h"
 
 #include <stb_image_write.h>
@@ -15,6 +16,7 @@
 #include <utility>
 
 #include "check.h"
+#include "exr.h"
 #include "files.h"
 
 namespace {
@@ -358,8 +360,9 @@ bool WriteImage(const Image& img, float exposure, const std::string& path,
                 const std::string& format, std::string* err) {
   CHECK(img.width > 0 && img.height > 0 &&
         img.pixels.size() == size_t(img.width) * img.height);
+  if (format == "exr") return WriteOpenExr(img, path, err);  // linear: no exposure
   if (format != "png" && format != "ppm") {
-    *err = path + ": unknown image format \"" + format + "\" (png or ppm)";
+    *err = path + ": unknown image format \"" + format + "\" (png, ppm or exr)";
     return false;
   }
   std::vector<uint8_t> rgb(img.pixels.size() * 3);
@@ -377,6 +380,19 @@ bool WriteImage(const Image& img, float exposure, const std::string& path,
   } else {
     bytes = "P6\n" + std::to_string(img.width) + " " + std::to_string(img.height) + "\n255\n";
     bytes.append(reinterpret_cast<const char*>(rgb.data()), rgb.size());
+  }
+  return WriteFileAtomic(path, bytes, err);
+}
+
+bool WriteRadianceHdr(const Image& img, const std::string& path, std::string* err) {
+  CHECK(img.width > 0 && img.height > 0 &&
+        img.pixels.size() == size_t(img.width) * img.height);
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "pixels are packed RGB floats");
+  // In memory, as the PNG, then written atomically.
+  std::string bytes;
+  if (!stbi_write_hdr_to_func(AppendBytes, &bytes, img.width, img.height, 3, &img.pixels[0].x)) {
+    *err = path + ": cannot encode Radiance HDR";
+    return false;
   }
   return WriteFileAtomic(path, bytes, err);
 }

@@ -14,7 +14,9 @@
 // radiosity (RGB) at every vertex, interpolated across (Gouraud).
 struct ShadedMesh {
   std::vector<glm::dvec3> positions;
-  // float: only drawn, after exposure, into 8 bits; positions stay double.
+  // float: drawn into 8 bits after exposure, or written linear as RGBE
+  // (8-bit mantissas) or EXR float, which a float holds exactly; positions
+  // stay double.
   std::vector<glm::vec3> colors;          // linear radiosity, >= 0
   std::vector<std::array<int, 4>> polys;  // vertex ids, CCW; [3] < 0: triangle
 };
@@ -22,13 +24,15 @@ struct ShadedMesh {
 // Picture size limits (--size): a side at most kMaxImageSide and the whole
 // at most kMaxImagePixels, 8192 x 8192. Rendering and writing take about
 // 18 bytes per pixel (a float RGB and a float depth per pixel, the 8-bit
-// copy, the PNG encoder's buffers), so about 1.2 GB at the limit.
+// copy, the PNG encoder's buffers), so about 1.2 GB at the limit; the RGBE
+// copy of final.hdr adds about 4. --format exr takes about 40 (float
+// planes, and tinyexr's two copies of the file), 2.7 GB at the limit.
 constexpr int kMaxImageSide = 16384;
 constexpr long kMaxImagePixels = 1L << 26;
 
 struct Image {
   int width = 0, height = 0;
-  std::vector<glm::vec3> pixels;  // linear radiosity, row 0 at the top (float: 8-bit output)
+  std::vector<glm::vec3> pixels;  // linear radiosity, row 0 at the top (float, as ShadedMesh's colours)
 };
 
 // A camera that frames the box [lo, hi], looking at it from the front
@@ -44,10 +48,18 @@ void Render(const ShadedMesh& mesh, const Camera& cam, int width, int height,
 // values (see image.cpp for the rule).
 float AutoExposure(const ShadedMesh& mesh);
 
-// Writes an 8-bit sRGB picture, exposure applied and clamped.
-// FORMAT is "png" or "ppm". False with *err on an I/O error.
+// Writes the picture: FORMAT "png" or "ppm" in 8-bit sRGB, exposure
+// applied and clamped; "exr" linear, as it is (exr.h). False with *err on
+// an I/O error.
 bool WriteImage(const Image& img, float exposure, const std::string& path,
                 const std::string& format, std::string* err);
+
+// The picture as it is, linear (no exposure, no clamp, no sRGB curve), as
+// Radiance RGBE (stb_image_write, run-length encoded): 8-bit mantissas
+// under the largest channel's exponent, so each channel is within
+// max(R, G, B) / 128 below the float, over 2^-128 to 2^127; for tone
+// mappers and for reading lighting values off the picture.
+bool WriteRadianceHdr(const Image& img, const std::string& path, std::string* err);
 
 // PLY (ascii) with per-vertex colours, exposure and sRGB applied, which
 // MeshLab and Blender open.

@@ -132,7 +132,8 @@ const char kUsage[] =
     "                         -e, -s, -t and the output may differ)\n"
     "      --camera \"ex ey ez tx ty tz fov\"\n"
     "      --size WxH         picture size (default 512x512)\n"
-    "      --format png|ppm   picture format (default png)\n"
+    "      --format png|ppm|exr  picture format (default png; exr: linear radiosity,\n"
+    "                         32-bit float, unexposed; final.hdr is always written)\n"
     "  -q, --quiet            no progress, no messages but errors and warnings\n"
     "  -v, --verbose          a line per progress sample\n"
     "      --version          print the version\n"
@@ -287,8 +288,8 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       case kSize: ok = Size(optarg, &o.width, &o.height, err); break;
       case kFormat:
         o.format = optarg;
-        if (o.format != "png" && o.format != "ppm")
-          ok = BadOption("--format", optarg, "must be png or ppm", err);
+        if (o.format != "png" && o.format != "ppm" && o.format != "exr")
+          ok = BadOption("--format", optarg, "must be png, ppm or exr", err);
         break;
       case 'q': o.verbosity = 0; quiet = true; break;
       case 'v': o.verbosity = 2; verbose = true; break;

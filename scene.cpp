@@ -51,12 +51,19 @@ std::string Where(const std::string& file, long line) {
   return file + ":" + std::to_string(line) + ": ";
 }
 
-// A token for an error message: quoted, and cut short if it is long.
+// A token for an error message: quoted, and cut short if it is long (a
+// number or a name of a megabyte would not make a line one can read).
+// File names are never cut (QuoteFile).
 std::string Quote(std::string_view tok) {
   constexpr size_t kShown = 40;
   if (tok.size() <= kShown) return "'" + std::string(tok) + "'";
   return "'" + std::string(tok.substr(0, kShown)) + "...'";
 }
+
+// A file name for an error message: quoted and whole, since its last part,
+// the file's own name, is what the user must see. Control characters are
+// escaped where the message is printed (Printable, app.h).
+std::string QuoteFile(const std::string& path) { return "'" + path + "'"; }
 
 std::string Num(double x) {
   char buf[32];
@@ -232,6 +239,13 @@ class Loader {
     err_ = file + ": " + what;
     return false;
   }
+  // A face without area (the mesh cannot cut it, and it sends and takes
+  // no light): skipped with a warning that says where, and counted.
+  bool SkipFace(const std::string& file, long line, const std::string& why) {
+    if (warnings_) warnings_->push_back(Where(file, line) + "zero-area face skipped" + why);
+    ++skipped_;
+    return true;
+  }
   bool Statement(const std::string& path, long ln, const std::string& raw);
   bool Vertex(const std::vector<std::string_view>& t, std::string* what);
   bool FaceLine(const std::string& path, long ln, const std::vector<std::string_view>& t);
@@ -367,6 +381,10 @@ bool Loader::FaceLine(const std::string& path, long ln, const std::vector<std::s
   if (t.size() - 1 > kMaxPolygon)
     return Fail(path, ln, "f: a polygon of " + std::to_string(t.size() - 1) +
                               " vertices (the limit is " + std::to_string(kMaxPolygon) + ")");
+  // Fewer than 3 references is no polygon at all; 3 or more that name
+  // fewer than 3 distinct points (f 5 5 6) is one without area, below.
+  if (t.size() - 1 < 3)
+    return Fail(path, ln, "f: a face needs at least 3 vertices, got " + std::to_string(t.size() - 1));
   Face face;
   face.verts.reserve(t.size() - 1);
   const long n = static_cast<long>(verts_.size());
@@ -397,14 +415,15 @@ bool Loader::FaceLine(const std::string& path, long ln, const std::vector<std::s
       return Fail(path, ln, "f: vertex index " + std::to_string(k) + " is out of range (" +
                                 std::to_string(n) + " vertices defined so far)");
     }
+    // A vertex repeated in a row (f 1 2 2 3, also by position: two v
+    // lines of one point) adds no corner: dropped, and the rest is the
+    // polygon the user meant.
     const glm::dvec3& v = verts_[static_cast<size_t>(at)];
     if (face.verts.empty() || face.verts.back() != v) face.verts.push_back(v);
   }
   while (face.verts.size() > 1 && face.verts.back() == face.verts.front()) face.verts.pop_back();
-  if (face.verts.size() < 3) {
-    return Fail(path, ln, "f: a face needs at least 3 distinct vertices, got " +
-                              std::to_string(face.verts.size()));
-  }
+  if (face.verts.size() < 3)  // a point or a segment: no area, as below
+    return SkipFace(path, ln, face.verts.size() == 1 ? " (1 distinct vertex)" : " (2 distinct vertices)");
 
   glm::dvec3 lo = face.verts[0], hi = face.verts[0], centroid{0.0};
   for (const glm::dvec3& v : face.verts) {
@@ -419,11 +438,7 @@ bool Loader::FaceLine(const std::string& path, long ln, const std::vector<std::s
   face.area = glm::length(newell);
   if (!std::isfinite(face.area) || !std::isfinite(extent * extent))
     return Fail(path, ln, "f: face too large: its area is not a finite number");
-  if (!(face.area > kZeroArea * extent * extent)) {
-    if (warnings_) warnings_->push_back(Where(path, ln) + "zero-area face skipped");
-    ++skipped_;
-    return true;
-  }
+  if (!(face.area > kZeroArea * extent * extent)) return SkipFace(path, ln, "");
   face.normal = newell / glm::length(newell);
   double off = 0.0;
   for (const glm::dvec3& v : face.verts) {
@@ -454,7 +469,7 @@ bool Loader::Mtllib(const std::string& obj, long ln, const std::vector<std::stri
     if (!mtl_loaded_.insert(path).second) continue;  // named twice: same materials
     std::string why;
     std::FILE* f = OpenInputFile(path, kMaxMtlBytes, &why);
-    if (!f) return Fail(obj, ln, "mtllib: cannot open " + Quote(path) + ": " + why);
+    if (!f) return Fail(obj, ln, "mtllib: cannot open " + QuoteFile(path) + ": " + why);
     s_.files.push_back(path);
     bool ok = LoadMtl(path, f, obj, ln);
     std::fclose(f);
@@ -477,7 +492,7 @@ bool Loader::LoadMtl(const std::string& path, std::FILE* f, const std::string& o
     if (!what.empty()) return Fail(path, ln, what);
   }
   if (!reader.error().empty()) {
-    return Fail(obj, obj_line, "mtllib: cannot read " + Quote(path) + ": " + reader.error());
+    return Fail(obj, obj_line, "mtllib: cannot read " + QuoteFile(path) + ": " + reader.error());
   }
   return true;
 }

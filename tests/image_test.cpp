@@ -3,6 +3,7 @@
 #include <stb_image.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -375,6 +376,40 @@ TEST_F(ImageFiles, WriteImagePpmAndPng) {
   EXPECT_EQ(err.rfind(bad + ": ", 0), 0u) << err;
   EXPECT_FALSE(WriteImage(img, 1.0f, dir_ + "/a.jpg", "jpg", &err));
   EXPECT_NE(err.find("jpg"), std::string::npos) << err;
+}
+
+// final.hdr: the picture linear, as RGBE, read back with stb's reader.
+// Each channel within max(R, G, B) / 128 below the float (8-bit mantissas
+// under the largest channel's exponent, rounded down), over the range
+// radiosity takes (Ke is in the scene's units); row 0 at the top.
+TEST_F(ImageFiles, WriteRadianceHdr) {
+  Image img;
+  img.width = 3;
+  img.height = 2;
+  img.pixels = {glm::vec3(0),     glm::vec3(17, 12, 4),     glm::vec3(1e-20f, 0, 3e30f),
+                glm::vec3(0.25f), glm::vec3(1e-3f, 1, 1e3f), glm::vec3(0.5f, 2, 7)};
+  const std::string path = dir_ + "/a.hdr";
+  std::string err;
+  ASSERT_TRUE(WriteRadianceHdr(img, path, &err)) << err;
+  EXPECT_EQ(ReadAll(path).rfind("#?RADIANCE\n", 0), 0u);
+  int w = 0, h = 0, comp = 0;
+  float* data = stbi_loadf(path.c_str(), &w, &h, &comp, 3);
+  ASSERT_NE(data, nullptr) << stbi_failure_reason();
+  EXPECT_EQ(w, 3);
+  EXPECT_EQ(h, 2);
+  for (size_t i = 0; i < img.pixels.size(); ++i) {
+    const glm::vec3& want = img.pixels[i];
+    const float step = std::max({want.r, want.g, want.b}) / 128;
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_LE(data[3 * i + k], want[k]) << "pixel " << i << " channel " << k;
+      EXPECT_GE(data[3 * i + k], want[k] - step) << "pixel " << i << " channel " << k;
+    }
+  }
+  stbi_image_free(data);
+
+  const std::string bad = dir_ + "/missing/a.hdr";
+  EXPECT_FALSE(WriteRadianceHdr(img, bad, &err));
+  EXPECT_EQ(err.rfind(bad + ": ", 0), 0u) << err;
 }
 
 TEST_F(ImageFiles, WritePly) {

@@ -251,10 +251,12 @@ TEST(Options, BadNumbers) {
 
 TEST(Options, Format) {
   EXPECT_EQ(Parses({"--format", "png", "s.obj"}).format, "png");
+  EXPECT_EQ(Parses({"--format", "exr", "s.obj"}).format, "exr");
   EXPECT_EQ(Error({"--format", "jpg", "s.obj"}),
-            "--format 'jpg': must be png or ppm (try 'radiosity --help')");
+            "--format 'jpg': must be png, ppm or exr (try 'radiosity --help')");
   EXPECT_EQ(Error({"--format", "PNG", "s.obj"}),
-            "--format 'PNG': must be png or ppm (try 'radiosity --help')");
+            "--format 'PNG': must be png, ppm or exr (try 'radiosity --help')");
+  EXPECT_NE(Error({"--format", "hdr", "s.obj"}), "");  // final.hdr is always written
 }
 
 TEST(Options, SizeForms) {

@@ -140,6 +140,35 @@ else
     || fail "result.gltf or result.bin missing"
 fi
 
+# final.hdr beside final.png: Radiance RGBE of the picture's size, moved out
+# of the run's private directory with the rest. --format exr: final.exr and
+# the frames in OpenEXR (magic 76 2f 31 01), no final.png; a png run into the
+# same directory then removes them, as any earlier run's outputs.
+# (Pixels against result.csv: tests/exr_test.cpp.)
+exr_magic() { head -c 4 "$1" 2>/dev/null | od -An -tx1 | tr -d ' \n'; }
+if [ "$(head -1 "$T/conv/final.hdr")" = "#?RADIANCE" ] && grep -aqx -- '-Y 512 +X 512' "$T/conv/final.hdr" &&
+   [ -s "$T/conv/final.png" ] && ! ls -A "$T/conv" | grep -q '^\.radiosity-'; then
+  pass "final.hdr beside final.png: Radiance RGBE, 512x512, nothing left in a staging directory"
+else
+  fail "final.hdr: $(head -c 80 "$T/conv/final.hdr" | tr '\n' '|'); $(ls -A "$T/conv" | tr '\n' ' ')"
+fi
+run_rad "$T/exr" -j 0 -r 32 -s 30 --size 64x48 --format exr "$CB"
+frames=$(cd "$T/exr" && ls frame-*.exr 2>/dev/null | wc -l)
+if [ "$RC" -eq 0 ] && [ "$(exr_magic "$T/exr/final.exr")" = 762f3101 ] && [ "$frames" -ge 1 ] &&
+   [ "$(exr_magic "$T/exr/frame-01.exr")" = 762f3101 ] && [ ! -e "$T/exr/final.png" ] &&
+   grep -aqx -- '-Y 48 +X 64' "$T/exr/final.hdr"; then
+  pass "--format exr: final.exr and $frames frame-NN.exr in OpenEXR, final.hdr 64x48, no final.png"
+else
+  fail "--format exr (exit $RC): $(ls "$T/exr" | tr '\n' ' ')"
+fi
+run_rad "$T/exr" -j 0 -r 32 -s 30 --size 64x48 "$CB"
+left=$(cd "$T/exr" && ls final.exr frame-*.exr 2>/dev/null | tr '\n' ' ')
+if [ "$RC" -eq 0 ] && [ -z "$left" ] && [ -s "$T/exr/final.png" ] && [ -s "$T/exr/final.hdr" ]; then
+  pass "a png run after an exr one: final.png and final.hdr, the EXR files removed"
+else
+  fail "a png run after an exr one (exit $RC) left: $left; has $(ls "$T/exr" | tr '\n' ' ')"
+fi
+
 # Progress: to a file, plain lines (no \r); with -q, nothing.
 timeout 120 "$RADIOSITY" -o "$T/prog" -j 1 -r 64 "$CB" >/dev/null 2>"$T/prog.err"; rc=$?
 n=$(grep -c '^radiosity: wave [0-9]* | [0-9]* shots | .* | [0-9]* workers* | ' "$T/prog.err")

@@ -114,8 +114,6 @@ v 1 0
 "
 bad_obj "face with 2 vertices" 4 "${tri}f 1 2
 "
-bad_obj "face with 2 distinct vertices" 5 "${quad}f 1 2 1
-"
 bad_obj "bent quad (5%)" 5 "v 0 0 0
 v 1 0 0
 v 1 1 0.05
@@ -132,6 +130,16 @@ f 1 2 3
 bad_obj "malformed camera" 1 "# camera 0 0 5 0 0 0
 ${tri}f 1 2 3
 "
+
+# A long name is printed whole (issue 16: it was cut in the middle, and the
+# missing file's own name lost): the scene and an mtllib, 300 characters.
+deep=$c/$(printf '%090d' 0)/$(printf '%090d' 1)/$(printf '%090d' 2)
+fresh
+(cd "$c" && "$RADIOSITY" -q -o "$tmp/out" "$deep/does_not_exist.obj") >/dev/null 2>"$tmp/stderr"
+[ "$(cat "$tmp/stderr")" = "radiosity: $deep/does_not_exist.obj: cannot open: No such file or directory" ] ||
+  fail "a ${#deep}+-character scene path is not named whole: $(head -c 600 "$tmp/stderr")"
+printf 'mtllib %s/does_not_exist.mtl\n%sf 1 2 3 4\n' "$deep" "$quad" >"$c/bad.obj"
+reject "a 300-character mtllib path" "^radiosity: .*bad\.obj:1: mtllib: cannot open '$deep/does_not_exist\.mtl': No such"
 
 bad_mtl "Kd above 1" 2 "newmtl m
 Kd 1.5 0.5 0.5
@@ -326,6 +334,14 @@ f 1 2 3 4
 usemtl white
 f 5 6 7 8
 " "$mtl" 2
+# Repeated vertices (issue 16): f 1 1 2 has no area, a warning naming the
+# file and line, the face skipped (and counted: the receiver is face 2);
+# repeats in a row are dropped (f 1 2 2 3 4 is the quad).
+variant "repeated vertices" "$(printf '%s' "$obj" |
+  sed 's/^usemtl light$/f 5 5 6\nusemtl light/; s/^f 1 2 3 4$/f 1 2 2 3 4 4/; s/^f 5 6 7 8$/f 5 6 7 7 8/')
+" "$mtl" 2
+[ "$(cat "$tmp/stderr")" = "radiosity: warning: scene.obj:10: zero-area face skipped (2 distinct vertices)" ] ||
+  fail "repeated vertices: stderr '$(head -c 300 "$tmp/stderr")', want the one zero-area warning"
 variant "camera comment" "# camera 0.5 0.5 -3  0.5 0.5 0.5  40
 $obj" "$mtl"
 variant "UTF-8 byte order mark" $'\xEF\xBB\xBF'"$obj" "$mtl"

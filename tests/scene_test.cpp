@@ -471,12 +471,38 @@ TEST(Scene, VertexIndexErrors) {
 
 TEST(Scene, FaceVertexCountErrors) {
   const std::string v = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 0 0\n";
-  ExpectError(v + "f 1 2\n", 5, "at least 3 distinct vertices, got 2");
+  ExpectError(v + "f 1 2\n", 5, "f: a face needs at least 3 vertices, got 2");
   ExpectError(v + "f\n", 5, "got 0");
-  ExpectError(v + "f 1 2 2\n", 5, "got 2");
-  ExpectError(v + "f 1 2 1\n", 5, "got 2");
-  ExpectError(v + "f 1 2 4\n", 5, "got 2");  // 4 is at 2's position
-  ExpectError(v + "f 3 3 3 3\n", 5, "got 1");
+}
+
+// A face that names fewer than 3 distinct points (issue 16: f 5 5 6) has
+// no area: skipped with the zero-area warning, not an error; the faces
+// after it keep their numbers.
+TEST(Scene, RepeatedVerticesAreAZeroAreaFace) {
+  TempDir dir;
+  const std::string path = dir.Write("rep.obj",
+                                     "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 0 0\n"
+                                     "f 1 2 2\n"       // line 5
+                                     "f 1 2 1\n"       // back to the first
+                                     "f 1 2 4\n"       // 4 is at 2's position
+                                     "f 3 3 3 3\n"     // one point
+                                     "f 1 2 3\n");     // face 4, line 9
+  Loaded r = Load(path);
+  ASSERT_TRUE(r.ok) << r.err;
+  ASSERT_EQ(r.scene.faces.size(), 1u);
+  EXPECT_EQ(r.scene.faces[0].index, 4);
+  EXPECT_EQ(r.scene.faces[0].line, 9);
+  ASSERT_EQ(r.warnings.size(), 4u);
+  EXPECT_EQ(r.warnings[0], path + ":5: zero-area face skipped (2 distinct vertices)");
+  EXPECT_EQ(r.warnings[1], path + ":6: zero-area face skipped (2 distinct vertices)");
+  EXPECT_EQ(r.warnings[2], path + ":7: zero-area face skipped (2 distinct vertices)");
+  EXPECT_EQ(r.warnings[3], path + ":8: zero-area face skipped (1 distinct vertex)");
+
+  // Only repeats: the file has no faces left, as with any zero-area faces.
+  const std::string only = dir.Write("only.obj", "v 0 0 0\nv 1 0 0\nf 1 1 2\n");
+  r = Load(only);
+  ASSERT_FALSE(r.ok);
+  EXPECT_EQ(r.err, only + ": no faces left (1 zero-area faces skipped)");
 }
 
 TEST(Scene, VertexCoordinateErrors) {
@@ -493,6 +519,25 @@ TEST(Scene, VertexCoordinateErrors) {
   ExpectError("v\n", 1, "got 0");
   ExpectError("v 0 0 0 1 5\n", 1, "got 5");
   ExpectError("v 0 0 0 w\n", 1, "'w' is not a number");
+}
+
+// An error about a file names it whole (issue 16: a long mtllib path was
+// cut in the middle, losing the missing file's own name).
+TEST(Scene, LongFileNamesAreWhole) {
+  TempDir dir;
+  // Parts under NAME_MAX (255): the file is missing, the name is legal.
+  const std::string deep = "/" + std::string(90, 'd') + "/" + std::string(90, 'e') + "/" +
+                           std::string(90, 'f');
+  const std::string mtl = dir.path() + deep + "/does_not_exist.mtl";
+  ASSERT_GE(mtl.size(), 300u);
+  Loaded r = Load(dir.Write("m.obj", "mtllib " + mtl + "\n" + kSquaresVerts + "f 1 2 3 4\n"));
+  ASSERT_FALSE(r.ok);
+  EXPECT_EQ(r.err, dir.path() + "/m.obj:1: mtllib: cannot open '" + mtl +
+                       "': No such file or directory");
+  const std::string obj = dir.path() + deep + "/does_not_exist.obj";
+  r = Load(obj);
+  ASSERT_FALSE(r.ok);
+  EXPECT_EQ(r.err, obj + ": cannot open: No such file or directory");
 }
 
 TEST(Scene, MaterialReferenceErrors) {
