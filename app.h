@@ -22,6 +22,8 @@
 #include "solver.h"
 #include "subdivide.h"
 #include "transport.h"
+#include "view.h"
+#include "viewserver.h"
 
 // A message as the terminal may show it: names from the command line and
 // the scene can hold control characters and escape sequences, shown as \xNN.
@@ -61,6 +63,7 @@ class MasterRun {
   // Renders the solution once and writes it to every path.
   std::pair<ShadedMesh, float> Picture(const std::vector<std::string>& paths);
   void SaveCheckpoint(const RunState& state);
+  ViewInfo ViewOf() const;  // what the browser view shows of this run
 
   const Options& opts_;
   std::vector<Input> inputs_;  // what no output may replace
@@ -80,6 +83,8 @@ class MasterRun {
   std::unique_ptr<Transport> transport_;
   long sub_limit_ = 0;  // elements subdivision may reach: kMaxElements, or what memory allows
   RunResult result_;
+  std::unique_ptr<ViewServer> view_;  // --view
+  int workers_ = 0;                   // alive at the last sample
 };
 
 #endif

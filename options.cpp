@@ -133,6 +133,8 @@ const char kUsage[] =
     "      --camera \"ex ey ez tx ty tz fov\"\n"
     "      --size WxH         picture size (default 512x512)\n"
     "      --format png|ppm   picture format (default png)\n"
+    "      --view [HOST:]PORT  serve a live view of the run to a browser on\n"
+    "                         http://HOST:PORT/ (HOST: 127.0.0.1 unless given)\n"
     "  -q, --quiet            no progress, no messages but errors and warnings\n"
     "  -v, --verbose          a line per progress sample\n"
     "      --version          print the version\n"
@@ -147,7 +149,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
     kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
     kNoJoin, kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
     kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect, kConverge,
-    kCheckpoint, kCheckpointEvery, kResume, kNoGroups, kGroupSize,
+    kCheckpoint, kCheckpointEvery, kResume, kNoGroups, kGroupSize, kView,
   };
   static const option kLong[] = {
       {"out", required_argument, nullptr, 'o'},
@@ -189,6 +191,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       {"camera", required_argument, nullptr, kCamera},
       {"size", required_argument, nullptr, kSize},
       {"format", required_argument, nullptr, kFormat},
+      {"view", required_argument, nullptr, kView},
       {"quiet", no_argument, nullptr, 'q'},
       {"verbose", no_argument, nullptr, 'v'},
       {"version", no_argument, nullptr, kVersion},
@@ -211,7 +214,8 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
     // A name given empty would be ignored or misread: say so.
     if (optarg && !*optarg && (c == 'o' || c == 'H' || c == kWorkerCmd || c == kListen ||
                                c == kSecret || c == kConnect || c == kReference ||
-                               c == kConverge || c == kCheckpoint || c == kResume || c == kCamera)) {
+                               c == kConverge || c == kCheckpoint || c == kResume || c == kCamera ||
+                               c == kView)) {
       const option* o = kLong;
       while (o->name && o->val != c) ++o;
       BadOption(("--" + std::string(o->name)).c_str(), "", "needs a name, not an empty string", err);
@@ -290,6 +294,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
         if (o.format != "png" && o.format != "ppm")
           ok = BadOption("--format", optarg, "must be png or ppm", err);
         break;
+      case kView: o.view = optarg; break;
       case 'q': o.verbosity = 0; quiet = true; break;
       case 'v': o.verbosity = 2; verbose = true; break;
       case kVersion: return Parsed::kVersion;
@@ -358,6 +363,14 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       !ParseEndpoint(o.listen, false, &o.listen_host, &o.listen_port, &why)) {
     BadOption("--listen", o.listen.c_str(), why, err);
     return Parsed::kError;
+  }
+  // The view is for this machine's browser unless a host is named.
+  if (!o.view.empty()) {
+    if (!ParseEndpoint(o.view, false, &o.view_host, &o.view_port, &why)) {
+      BadOption("--view", o.view.c_str(), why, err);
+      return Parsed::kError;
+    }
+    if (o.view_host.empty()) o.view_host = "127.0.0.1";
   }
   // Remote workers take the place of local ones unless -j says otherwise.
   if (o.Remote() && !workers_given) o.workers = 0;
