@@ -154,11 +154,12 @@ void ViewServer::Shared::Serve() {
   s.set_payload_max_length(kMaxPayload);
   s.new_task_queue = [] { return new BoundedPool; };
   // A page elsewhere may make the browser ask a name that resolves to this
-  // machine (DNS rebinding); a loopback server answers its own names only.
+  // machine (DNS rebinding); a loopback server answers its own names only
+  // (and a request with no Host, which no browser sends).
   if (Loopback(host))
     s.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
       const std::string name = HostName(req.get_header_value("Host"));
-      if (Loopback(name) || name == host) return httplib::Server::HandlerResponse::Unhandled;
+      if (name.empty() || Loopback(name) || name == host) return httplib::Server::HandlerResponse::Unhandled;
       res.status = 403;
       res.set_content("403 not this server's name\n", "text/plain");
       return httplib::Server::HandlerResponse::Handled;
