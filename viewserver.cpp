@@ -153,6 +153,13 @@ void ViewServer::Shared::Serve() {
   s.set_write_timeout(kWriteTimeout);
   s.set_payload_max_length(kMaxPayload);
   s.new_task_queue = [] { return new BoundedPool; };
+  // SO_REUSEADDR only: the library's default adds SO_REUSEPORT, with which
+  // a second run on the same port would share it with the first, each
+  // browser request going to either.
+  s.set_socket_options([](int sock) {
+    const int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   // A page elsewhere may make the browser ask a name that resolves to this
   // machine (DNS rebinding); a loopback server answers its own names only
   // (and a request with no Host, which no browser sends).
@@ -261,7 +268,10 @@ void ViewServer::Stop() {
     return;
   }
   shared_->listener.detach();
-  shared_ = nullptr;  // left to the threads still using it
+  // Left to the threads still using it, and still reachable: not a leak.
+  static std::vector<Shared*> abandoned;
+  abandoned.push_back(shared_);
+  shared_ = nullptr;
 }
 
 void ViewServer::Row(const LogRow& row, int workers) {

@@ -31,7 +31,11 @@ class ViewServer {
   static constexpr int kIdleTimeout = 2;
   static constexpr int kReadTimeout = 2;
   static constexpr int kWriteTimeout = 5;
-  static constexpr int kKeepAliveRequests = 100;
+  // One request per connection: an idle kept-alive connection (a
+  // browser's, between its polls) would hold a thread, and the end of the
+  // run would wait for it; a new loopback connection per poll costs
+  // nothing.
+  static constexpr int kKeepAliveRequests = 1;
   static constexpr size_t kMaxPayload = 1024;  // a request body: none is needed
   // A mesh snapshot at most every kInterval seconds, and no sooner than
   // kCostFactor times the last one's cost after it: at most 1/kCostFactor

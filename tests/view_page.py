@@ -141,8 +141,10 @@ def in_log(panel, rows):
 
 
 def live(b, url, screenshot):
+    t0 = time.monotonic()
     if not check(load(b, url), "the live page draws the run's mesh"):
         return None
+    print("# drawn in %.1f s" % (time.monotonic() - t0), flush=True)
     s = b.eval("__test.stats()")
     check(s["colours"] >= 100 and s["lit"] >= 0.3,
           "the live picture shows the scene (%d colours, %.0f%% of the pixels lit)" % (s["colours"], 100 * s["lit"]),
@@ -151,6 +153,7 @@ def live(b, url, screenshot):
     # The page asks every half second; a new picture comes at most once a second.
     moved = b.wait("Number(__test.panel().shots) > %s && __test.panel().snapshot !== '%s' && __test.panel()" %
                    (p1["shots"], p1["snapshot"]), 20)
+    print("# moved in %.1f s" % (time.monotonic() - t0), flush=True)
     if check(bool(moved), "the page's shot count and picture move while the run goes on",
              "stayed at %s shots, snapshot %s" % (p1["shots"], p1["snapshot"])):
         ok("  shots %s -> %s, snapshot %s -> %s" % (p1["shots"], moved["shots"], p1["snapshot"], moved["snapshot"]))
