@@ -22,11 +22,13 @@ from cdp import Browser  # noqa: E402
 # The picture from the OBJ camera against final.png (8-bit sRGB values):
 # both draw the same vertex colours with perspective-correct Gouraud
 # shading and the same sRGB curve, so only float rounding and which pixel
-# an edge's centre falls in differ. Measured on the Cornell box: mean
-# 0.1, 0.4% of the pixels off by more than 16 (edges); allowed 1.0 and 2%.
-MEAN_TOLERANCE = 1.0
+# an edge's centre falls in differ. Measured on the Cornell box (SwiftShader):
+# mean 0.043, 0.05% of the pixels off by more than 16 (edges, and a few
+# pixels where one of the two has a crack between faces and the other
+# not); allowed ten and twenty times that.
+MEAN_TOLERANCE = 0.5
 BAD_LEVEL = 16
-BAD_TOLERANCE = 0.02
+BAD_TOLERANCE = 0.01
 
 # Helpers in the page: the WebGL canvas' pixels, their spread, and the
 # difference from a PNG given as a data: URL.

@@ -399,7 +399,12 @@
       const r = await fetch('mesh.bin', {cache: 'no-store'});
       if (r.ok) {
         const [id, shots] = (r.headers.get('X-Radiosity-Snapshot') || '0 0').split(' ').map(Number);
-        takeMesh(await r.arrayBuffer(), id, shots);
+        const buffer = await r.arrayBuffer();
+        try {
+          takeMesh(buffer, id, shots);
+        } catch (e) {  // a bad snapshot: said, and the next one is asked for
+          setStatus('snapshot ' + id + ': ' + e.message, 'error');
+        }
       }
     } finally {
       fetching = false;
