@@ -217,7 +217,14 @@ void MasterRun::Build() {
     std::fprintf(stderr, "radiosity: warning: %s: no face emits light (Ke); every B is 0\n",
                  opts_.scene_path.c_str());
   run_.wave_end = [this](int wave) {
-    Picture({FrameName(wave)});
+    auto shaded = Picture({FrameName(wave)});
+    // The view shows the wave's end, and nothing of the next wave until
+    // it is as far (a new wave starts again from the lights): the picture
+    // never goes back to a less converged one.
+    if (view_) {
+      view_->Snapshot(solver_->shots(), [&] { return std::move(shaded.first); });
+      view_floor_ = last_unshot_;
+    }
     if (opts_.verbosity >= 2)
       std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", wave, mesh_.LeafCount());
   };
@@ -361,12 +368,15 @@ void MasterRun::OnSample(const Sample& s) {
   if (with_ref) RmsError(scene_, FaceRadiosity(mesh_, solver_->radiosity()), ref_, &rms, &rel);
   log_.Row(s, with_ref ? &rms : nullptr, with_ref ? &rel : nullptr);
   workers_ = s.workers;
+  last_unshot_ = s.unshot;
   if (view_) {
     view_->Row({s.seconds, s.shots, s.wave, s.elements, s.unshot, with_ref ? rms : NAN,
                 with_ref ? rel : NAN},
                s.workers);
-    if (view_->SnapshotDue())
+    if (s.unshot <= view_floor_ && view_->SnapshotDue()) {
       view_->Snapshot(s.shots, [this] { return Shade(mesh_, solver_->radiosity()); });
+      view_floor_ = HUGE_VAL;
+    }
   }
   if (opts_.verbosity == 1) progress_->Update(s, with_ref ? &rms : nullptr, with_ref ? &rel : nullptr);
   if (opts_.verbosity >= 2) {

@@ -4,6 +4,7 @@
 #ifndef RADIOSITY_APP_H
 #define RADIOSITY_APP_H
 
+#include <cmath>
 #include <memory>
 #include <string>
 #include <utility>
@@ -85,6 +86,8 @@ class MasterRun {
   RunResult result_;
   std::unique_ptr<ViewServer> view_;  // --view
   int workers_ = 0;                   // alive at the last sample
+  double last_unshot_ = 1;            // the unshot fraction at the last sample
+  double view_floor_ = HUGE_VAL;      // no view snapshot above this unshot fraction
 };
 
 #endif

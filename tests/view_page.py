@@ -154,7 +154,7 @@ def live(b, url, screenshot):
     p1 = b.eval("__test.panel()")
     # The page asks every half second; a new picture comes at most once a second.
     moved = b.wait("Number(__test.panel().shots) > %s && __test.panel().snapshot !== '%s' && __test.panel()" %
-                   (p1["shots"], p1["snapshot"]), 20)
+                   (p1["shots"], p1["snapshot"]), 60)
     print("# moved in %.1f s" % (time.monotonic() - t0), flush=True)
     if check(bool(moved), "the page's shot count and picture move while the run goes on",
              "stayed at %s shots, snapshot %s" % (p1["shots"], p1["snapshot"])):
