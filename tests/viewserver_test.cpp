@@ -84,7 +84,7 @@ TEST(ViewServer, ServesThePageTheStateAndTheSnapshots) {
   EXPECT_EQ(foreign->status, 403);
 }
 
-TEST(ViewServer, StopsAtOnceWithASilentClientConnected) {
+TEST(ViewServer, StopsWithinItsWaitWithASilentClientConnected) {
   ViewServer view(Info(), {});
   std::string bound, err;
   ASSERT_TRUE(view.Start("127.0.0.1", 0, &bound, &err)) << err;
