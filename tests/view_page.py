@@ -3,11 +3,10 @@ looks at the live page of a running `radiosity --view` and, once the run
 has written its outputs, at its view.html, and prints one line per check
 (ok: ... / FAIL: ...), as tests/lib.sh does.
 
-usage: view_page.py URL OUTDIR [SCREENSHOT.png]
+usage: view_page.py URL OUTDIR
   URL     the live page (what the program printed after "view on")
   OUTDIR  the run's -o directory: view.html, final.png and log.csv are
           read from there once view.html appears
-  SCREENSHOT.png  also save a picture of the live page there (doc/view.png)
 """
 
 import base64
@@ -142,7 +141,7 @@ def in_log(panel, rows):
     return None
 
 
-def live(b, url, screenshot):
+def live(b, url):
     t0 = time.monotonic()
     if not check(load(b, url), "the live page draws the run's mesh"):
         return None
@@ -159,11 +158,7 @@ def live(b, url, screenshot):
     if check(bool(moved), "the page's shot count and picture move while the run goes on",
              "stayed at %s shots, snapshot %s" % (p1["shots"], p1["snapshot"])):
         ok("  shots %s -> %s, snapshot %s -> %s" % (p1["shots"], moved["shots"], p1["snapshot"], moved["snapshot"]))
-    panel = b.eval("__test.panel()")
-    if screenshot:
-        with open(screenshot, "wb") as f:
-            f.write(b.screenshot())
-    return panel
+    return b.eval("__test.panel()")
 
 
 def offline(b, outdir):
@@ -219,13 +214,12 @@ def offline(b, outdir):
 
 def main():
     url, outdir = sys.argv[1], sys.argv[2]
-    screenshot = sys.argv[3] if len(sys.argv) > 3 else None
     width, height = 512, 512
     t0 = time.monotonic()
     with Browser() as b:
         print("# chromium up in %.1f s" % (time.monotonic() - t0), flush=True)
         b.viewport(width, height)
-        panel = live(b, url, screenshot)
+        panel = live(b, url)
         print("# live page done at %.1f s" % (time.monotonic() - t0), flush=True)
         # The run's outputs appear together when it has written them all.
         deadline = time.monotonic() + 120
