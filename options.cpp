@@ -101,6 +101,8 @@ const char kUsage[] =
     "      --listen [HOST:]PORT  take workers that connect back (--secret);\n"
     "                         -j then defaults to 0\n"
     "      --secret FILE      shared secret of --listen and --connect (mode 0600 or 0400)\n"
+    "      --view [HOST:]PORT  serve a live view of the run to a browser on\n"
+    "                         http://HOST:PORT/ (HOST: 127.0.0.1 unless given)\n"
     "  -r, --resolution R     hemicube pixels across the top face (default 256)\n"
     "  -e, --epsilon E        stop when unshot energy < E x emitted (default 1e-3)\n"
     "  -s, --shots N          stop after N shots\n"
@@ -133,8 +135,6 @@ const char kUsage[] =
     "      --camera \"ex ey ez tx ty tz fov\"\n"
     "      --size WxH         picture size (default 512x512)\n"
     "      --format png|ppm   picture format (default png)\n"
-    "      --view [HOST:]PORT  serve a live view of the run to a browser on\n"
-    "                         http://HOST:PORT/ (HOST: 127.0.0.1 unless given)\n"
     "  -q, --quiet            no progress, no messages but errors and warnings\n"
     "  -v, --verbose          a line per progress sample\n"
     "      --version          print the version\n"
@@ -164,6 +164,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       {"listen", required_argument, nullptr, kListen},
       {"secret", required_argument, nullptr, kSecret},
       {"connect", required_argument, nullptr, kConnect},
+      {"view", required_argument, nullptr, kView},
       {"resolution", required_argument, nullptr, 'r'},
       {"epsilon", required_argument, nullptr, 'e'},
       {"shots", required_argument, nullptr, 's'},
@@ -191,7 +192,6 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       {"camera", required_argument, nullptr, kCamera},
       {"size", required_argument, nullptr, kSize},
       {"format", required_argument, nullptr, kFormat},
-      {"view", required_argument, nullptr, kView},
       {"quiet", no_argument, nullptr, 'q'},
       {"verbose", no_argument, nullptr, 'v'},
       {"version", no_argument, nullptr, kVersion},
@@ -237,6 +237,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       case kListen: o.listen = optarg; break;
       case kSecret: secret_file = optarg; break;
       case kConnect: o.connect = optarg; break;
+      case kView: o.view = optarg; break;
       case 'r':
         ok = Integer("--resolution", optarg, 8, Hemicube::kMaxResolution, &o.run.resolution, err);
         if (ok && o.run.resolution % 2) ok = BadOption("--resolution", optarg, "must be even", err);
@@ -294,7 +295,6 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
         if (o.format != "png" && o.format != "ppm")
           ok = BadOption("--format", optarg, "must be png or ppm", err);
         break;
-      case kView: o.view = optarg; break;
       case 'q': o.verbosity = 0; quiet = true; break;
       case 'v': o.verbosity = 2; verbose = true; break;
       case kVersion: return Parsed::kVersion;
