@@ -26,6 +26,7 @@ watch() {
   python3 - "$1" "$2" <<'EOF'
 import os, sys, time
 sys.path.insert(0, "tests")
+sys.dont_write_bytecode = True
 from cdp import Browser
 with Browser() as b:
     b.viewport(960, 600)

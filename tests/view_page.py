@@ -16,6 +16,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.dont_write_bytecode = True  # no __pycache__ in the tree
 from cdp import Browser  # noqa: E402
 
 # The picture from the OBJ camera against final.png (8-bit sRGB values):
