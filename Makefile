@@ -3,7 +3,7 @@
 CXX      ?= g++
 PREFIX   ?= /usr/local
 DESTDIR  ?=
-PKGS     := glm stb libssh libcrypto
+PKGS     := glm stb libssh libcrypto cpp-httplib
 OPTFLAGS ?= -O2 -g
 CXXFLAGS += $(OPTFLAGS) -std=c++17 -Wall -Wextra -MMD -MP
 CPPFLAGS += $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
@@ -19,7 +19,7 @@ NPROC    := $(shell nproc 2>/dev/null || echo 1)
 SAN      := -O1 -g1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := options.cpp app.cpp clock.cpp scene.cpp surface.cpp mesh.cpp divide.cpp groups.cpp hemicube.cpp subdivide.cpp solver.cpp shooters.cpp scheduler.cpp results.cpp image.cpp exr.cpp coding.cpp ffcodec.cpp protocol.cpp version.cpp inprocess.cpp pool.cpp worker.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp files.cpp memory.cpp
+LIB_SRCS  := options.cpp app.cpp clock.cpp scene.cpp surface.cpp mesh.cpp divide.cpp groups.cpp hemicube.cpp subdivide.cpp solver.cpp shooters.cpp scheduler.cpp results.cpp image.cpp exr.cpp coding.cpp ffcodec.cpp protocol.cpp version.cpp inprocess.cpp pool.cpp worker.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp files.cpp memory.cpp view.cpp viewserver.cpp
 # Only for the unit tests and the benchmarks, never in the program.
 SIM_SRCS  := sim.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)
@@ -67,6 +67,15 @@ $(B)/bench/%.o: bench/%.cpp | $(B)/bench
 # Vectorising keeps each float operation as it is, so columns are unchanged.
 $(B)/hemicube.o: CXXFLAGS += -ftree-vectorize -fvect-cost-model=dynamic
 
+# The browser view's page, view/view.html and view/view.js, as C++ raw
+# string literals that view.cpp includes (why there: view.cpp).
+$(B)/view_page.inc: view/view.html view/view.js | $(B)
+	@! grep -q ')radiosity_view"' view/view.html view/view.js || { echo "view/: the raw string delimiter is in the page" >&2; exit 1; }
+	{ printf 'const char kViewHtml[] = R"radiosity_view('; cat view/view.html; printf ')radiosity_view";\n'; \
+	  printf 'const char kViewJs[] = R"radiosity_view('; cat view/view.js; printf ')radiosity_view";\n'; } > $@
+$(B)/view.o: $(B)/view_page.inc
+$(B)/view.o: CPPFLAGS += -I$(B)
+
 $(B)/%.o: %.cpp | $(B)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c -o $@ $<
 
@@ -96,7 +105,7 @@ asan:
 demo: deps
 	@$(MAKE) --no-print-directory radiosity
 	./radiosity -o out/cornell scenes/cornell.obj
-	@echo "pictures and results: $(CURDIR)/out/cornell (final.png, final.hdr, frame-NN.png per wave, error.svg, result.csv, log.csv, result.ply, result.gltf)"
+	@echo "pictures and results: $(CURDIR)/out/cornell (final.png, final.hdr, frame-NN.png per wave, error.svg, result.csv, log.csv, result.ply, result.gltf, view.html)"
 
 bench: deps
 	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -57,7 +58,7 @@ void Say(const std::string& line) { std::fprintf(stderr, "radiosity: %s\n", Prin
 bool OutputName(const std::string& name) {
   static const char* const kNames[] = {"log.csv",    "error.svg",  "result.csv", "result.ply",
                                        "result.gltf", "result.bin", "final.png",  "final.ppm",
-                                       "final.exr",   "final.hdr"};
+                                       "final.exr",   "final.hdr",  "view.html"};
   for (const char* n : kNames)
     if (name == n) return true;
   // frame-NN.png, .ppm or .exr, NN two or more digits
@@ -193,6 +194,14 @@ void MasterRun::Build() {
   g_staging = &staging_;
   if (!log_.Open(staging_.Path("log.csv"), &err)) Die(kExitFailure, err);
   if (!opts_.resume_file.empty()) log_.Restore(resume_.log);
+  if (!opts_.view.empty()) {
+    view_ = std::make_unique<ViewServer>(ViewOf(), log_.rows());
+    std::string bound;
+    if (!view_->Start(opts_.view_host, opts_.view_port, &bound, &err))
+      Die(kExitFailure, "--view " + opts_.view + ": " + err);
+    // Said even with -q, as --listen's address is: with port 0 it is news.
+    std::fprintf(stderr, "radiosity: view on http://%s/\n", bound.c_str());
+  }
 
   // A closed terminal or ssh session (SIGHUP) stops the run as Ctrl-C does.
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, OnSignal);
@@ -207,7 +216,14 @@ void MasterRun::Build() {
   if (solver_->Dark())  // a legal scene, but most likely a missing Ke
     Say("warning: " + opts_.scene_path + ": no face emits light (Ke); every B is 0");
   run_.wave_end = [this](int wave) {
-    Picture({FrameName(wave)});
+    auto shaded = Picture({FrameName(wave)});
+    // The view shows the wave's end, and nothing of the next wave until
+    // it is as far (a new wave starts again from the lights): the picture
+    // never goes back to a less converged one.
+    if (view_) {
+      view_->Snapshot(solver_->shots(), [&] { return std::move(shaded.first); });
+      view_floor_ = last_unshot_;
+    }
     if (opts_.verbosity >= 2)
       std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", wave, mesh_.LeafCount());
   };
@@ -237,7 +253,7 @@ void MasterRun::CheckOutputs(const std::vector<Input>& ck_inputs) {
   };
   if (!MakeDirs(opts_.out_dir, &err)) Die(kExitFailure, err);
   for (const char* n : {"log.csv", "error.svg", "result.csv", "result.ply", "result.gltf",
-                        "result.bin", "final.hdr"})
+                        "result.bin", "final.hdr", "view.html"})
     check("", opts_.out_dir + "/" + n, inputs_);
   check("", opts_.out_dir + "/final." + opts_.format, inputs_);
   if (!opts_.converge.empty()) check("--converge ", opts_.converge, inputs_);
@@ -340,11 +356,27 @@ void MasterRun::SaveCheckpoint(const RunState& state) {
                  (MonotonicSeconds() - t0) * 1e3);
 }
 
+ViewInfo MasterRun::ViewOf() const {
+  const std::string& path = opts_.scene_path;
+  return {path.substr(path.rfind('/') + 1), camera_, opts_.width, opts_.height, run_.epsilon};
+}
+
 void MasterRun::OnSample(const Sample& s) {
   double rms = 0, rel = 0;
   const bool with_ref = !ref_.empty();
   if (with_ref) RmsError(scene_, FaceRadiosity(mesh_, solver_->radiosity()), ref_, &rms, &rel);
   log_.Row(s, with_ref ? &rms : nullptr, with_ref ? &rel : nullptr);
+  workers_ = s.workers;
+  last_unshot_ = s.unshot;
+  if (view_) {
+    view_->Row({s.seconds, s.shots, s.wave, s.elements, s.unshot, with_ref ? rms : NAN,
+                with_ref ? rel : NAN},
+               s.workers);
+    if (s.unshot <= view_floor_ && view_->SnapshotDue()) {
+      view_->Snapshot(s.shots, [this] { return Shade(mesh_, solver_->radiosity()); });
+      view_floor_ = HUGE_VAL;
+    }
+  }
   if (opts_.verbosity == 1) progress_->Update(s, with_ref ? &rms : nullptr, with_ref ? &rel : nullptr);
   if (opts_.verbosity >= 2) {
     std::fprintf(stderr, "radiosity: %8.2f s %7ld shots  unshot %.3e", s.seconds, s.shots, s.unshot);
@@ -438,6 +470,23 @@ void MasterRun::WriteOutputs() {
       !WriteGltf(shaded.first, shaded.second, staging_.Path("result.gltf"),
                  staging_.Path("result.bin"), &err))
     Die(kExitFailure, err);
+  const std::string how = r.status == RunStatus::kConverged ? "converged"
+                          : r.status == RunStatus::kStopped ? StoppedBy()
+                                                            : r.why;
+  {
+    // view.html: the browser view with the final state and mesh in it.
+    ViewState final_state;
+    final_state.status = how;
+    final_state.workers = workers_;
+    final_state.snapshot = 1;
+    final_state.snapshot_shots = r.shots;
+    std::string blob = ViewMeshBlob(shaded.first, shaded.second);
+    if (!WriteFileAtomic(staging_.Path("view.html"),
+                         OfflineViewPage(ViewStateJson(ViewOf(), final_state, log_.rows(), 0), blob),
+                         &err))
+      Die(kExitFailure, err);
+    if (view_) view_->Finish(std::move(blob), r.shots, how);
+  }
   if (!opts_.converge.empty()) {
     // A reference must be converged: one cut short by -s, -t or a signal
     // would pass its own error on to every run measured against it.
@@ -462,9 +511,6 @@ void MasterRun::WriteOutputs() {
                  "emitted (epsilon %g)\n",
                  r.why.c_str(), r.unshot, run_.epsilon);
   if (opts_.verbosity >= 1) {
-    const std::string how = r.status == RunStatus::kConverged ? "converged"
-                            : r.status == RunStatus::kStopped ? StoppedBy()
-                                                              : r.why;
     std::fprintf(stderr,
                  "radiosity: %s: %ld shots in %.2f s, unshot %.3g of emitted; "
                  "%zu patches, %ld elements (%ld built; %d waves, %ld division passes "
@@ -473,4 +519,11 @@ void MasterRun::WriteOutputs() {
                  built_, r.waves, r.passes, r.subdivide_s, Shooters(mesh_), mesh_.groups.size(),
                  Printable(out).c_str());
   }
+  if (view_ && opts_.verbosity >= 2)
+    std::fprintf(stderr,
+                 "radiosity: view: %ld mesh snapshots, %.2f ms each (at most %.2f), %.3f s in all, "
+                 "%.2f%% of the run\n",
+                 view_->snapshots(), 1e3 * view_->snapshot_seconds() / std::max(1L, view_->snapshots()),
+                 1e3 * view_->max_snapshot_seconds(), view_->snapshot_seconds(),
+                 100 * view_->snapshot_seconds() / std::max(1e-9, r.seconds));
 }

@@ -4,6 +4,7 @@
 #ifndef RADIOSITY_APP_H
 #define RADIOSITY_APP_H
 
+#include <cmath>
 #include <memory>
 #include <string>
 #include <utility>
@@ -22,6 +23,8 @@
 #include "solver.h"
 #include "subdivide.h"
 #include "transport.h"
+#include "view.h"
+#include "viewserver.h"
 
 // A message as the terminal may show it: names from the command line and
 // the scene can hold control characters and escape sequences, shown as \xNN.
@@ -63,6 +66,7 @@ class MasterRun {
   std::pair<ShadedMesh, float> Picture(const std::vector<std::string>& paths,
                                        const std::string& hdr_path = "");
   void SaveCheckpoint(const RunState& state);
+  ViewInfo ViewOf() const;  // what the browser view shows of this run
 
   const Options& opts_;
   std::vector<Input> inputs_;  // what no output may replace
@@ -82,6 +86,10 @@ class MasterRun {
   std::unique_ptr<Transport> transport_;
   long sub_limit_ = 0;  // elements subdivision may reach: kMaxElements, or what memory allows
   RunResult result_;
+  std::unique_ptr<ViewServer> view_;  // --view
+  int workers_ = 0;                   // alive at the last sample
+  double last_unshot_ = 1;            // the unshot fraction at the last sample
+  double view_floor_ = HUGE_VAL;      // no view snapshot above this unshot fraction
 };
 
 #endif

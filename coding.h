@@ -44,6 +44,13 @@ inline void PutF64(std::string* out, double d) {
   PutFixed64(out, bits);
 }
 
+// IEEE 754 single (the browser view's mesh: WebGL draws in float).
+inline void PutF32(std::string* out, float f) {
+  uint32_t bits;
+  std::memcpy(&bits, &f, 4);
+  PutFixed32(out, bits);
+}
+
 inline void PutVec(std::string* out, const glm::dvec3& v) {
   PutF64(out, v.x);
   PutF64(out, v.y);

@@ -194,12 +194,17 @@ uint8_t Encode(float linear, float exposure) {
   return uint8_t(std::lround(s * 255));
 }
 
-// The body of a JSON string: quotes, backslashes and control characters escaped.
+void AppendBytes(void* context, void* data, int size) {
+  static_cast<std::string*>(context)->append(static_cast<const char*>(data), size_t(size));
+}
+
+}  // namespace
+
 std::string JsonString(const std::string& s) {
   std::string out;
   for (unsigned char c : s) {
     if (c == '"' || c == '\\') out += '\\', out += char(c);
-    else if (c < 0x20) {
+    else if (c < 0x20 || c == '<') {
       char u[8];
       std::snprintf(u, sizeof u, "\\u%04x", c);
       out += u;
@@ -207,12 +212,6 @@ std::string JsonString(const std::string& s) {
   }
   return out;
 }
-
-void AppendBytes(void* context, void* data, int size) {
-  static_cast<std::string*>(context)->append(static_cast<const char*>(data), size_t(size));
-}
-
-}  // namespace
 
 Camera FrameBox(const glm::dvec3& lo, const glm::dvec3& hi) {
   constexpr double kFov = 45.0;

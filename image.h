@@ -35,6 +35,11 @@ struct Image {
   std::vector<glm::vec3> pixels;  // linear radiosity, row 0 at the top (float, as ShadedMesh's colours)
 };
 
+// The body of a JSON string: quotes, backslashes and control characters
+// escaped, and '<' too, so that it may stand inside an HTML <script>
+// element (view.html) without ending it.
+std::string JsonString(const std::string& s);
+
 // A camera that frames the box [lo, hi], looking at it from the front
 // (+z side), slightly above.
 Camera FrameBox(const glm::dvec3& lo, const glm::dvec3& hi);

@@ -101,6 +101,8 @@ const char kUsage[] =
     "      --listen [HOST:]PORT  take workers that connect back (--secret);\n"
     "                         -j then defaults to 0\n"
     "      --secret FILE      shared secret of --listen and --connect (mode 0600 or 0400)\n"
+    "      --view [HOST:]PORT  serve a live view of the run to a browser on\n"
+    "                         http://HOST:PORT/ (HOST: 127.0.0.1 unless given)\n"
     "  -r, --resolution R     hemicube pixels across the top face (default 256)\n"
     "  -e, --epsilon E        stop when unshot energy < E x emitted (default 1e-3)\n"
     "  -s, --shots N          stop after N shots\n"
@@ -148,7 +150,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
     kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
     kNoJoin, kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
     kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect, kConverge,
-    kCheckpoint, kCheckpointEvery, kResume, kNoGroups, kGroupSize,
+    kCheckpoint, kCheckpointEvery, kResume, kNoGroups, kGroupSize, kView,
   };
   static const option kLong[] = {
       {"out", required_argument, nullptr, 'o'},
@@ -163,6 +165,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       {"listen", required_argument, nullptr, kListen},
       {"secret", required_argument, nullptr, kSecret},
       {"connect", required_argument, nullptr, kConnect},
+      {"view", required_argument, nullptr, kView},
       {"resolution", required_argument, nullptr, 'r'},
       {"epsilon", required_argument, nullptr, 'e'},
       {"shots", required_argument, nullptr, 's'},
@@ -212,7 +215,8 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
     // A name given empty would be ignored or misread: say so.
     if (optarg && !*optarg && (c == 'o' || c == 'H' || c == kWorkerCmd || c == kListen ||
                                c == kSecret || c == kConnect || c == kReference ||
-                               c == kConverge || c == kCheckpoint || c == kResume || c == kCamera)) {
+                               c == kConverge || c == kCheckpoint || c == kResume || c == kCamera ||
+                               c == kView)) {
       const option* o = kLong;
       while (o->name && o->val != c) ++o;
       BadOption(("--" + std::string(o->name)).c_str(), "", "needs a name, not an empty string", err);
@@ -234,6 +238,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       case kListen: o.listen = optarg; break;
       case kSecret: secret_file = optarg; break;
       case kConnect: o.connect = optarg; break;
+      case kView: o.view = optarg; break;
       case 'r':
         ok = Integer("--resolution", optarg, 8, Hemicube::kMaxResolution, &o.run.resolution, err);
         if (ok && o.run.resolution % 2) ok = BadOption("--resolution", optarg, "must be even", err);
@@ -359,6 +364,14 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       !ParseEndpoint(o.listen, false, &o.listen_host, &o.listen_port, &why)) {
     BadOption("--listen", o.listen.c_str(), why, err);
     return Parsed::kError;
+  }
+  // The view is for this machine's browser unless a host is named.
+  if (!o.view.empty()) {
+    if (!ParseEndpoint(o.view, false, &o.view_host, &o.view_port, &why)) {
+      BadOption("--view", o.view.c_str(), why, err);
+      return Parsed::kError;
+    }
+    if (o.view_host.empty()) o.view_host = "127.0.0.1";
   }
   // Remote workers take the place of local ones unless -j says otherwise.
   if (o.Remote() && !workers_given) o.workers = 0;

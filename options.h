@@ -43,6 +43,10 @@ struct Options {
   std::string connect, connect_host;
   int connect_port = 0;
   std::string secret_file, secret;  // --secret FILE and its contents
+  // --view [HOST:]PORT as given, and parsed (HOST 127.0.0.1 unless given):
+  // the live view in a browser.
+  std::string view, view_host;
+  int view_port = 0;
   // Workers from -H or --listen, beside or instead of the -j local ones.
   bool Remote() const { return !hosts.empty() || !listen.empty(); }
 

@@ -1,26 +1,27 @@
 #!/bin/sh
 # Installs the Debian packages radiosity needs to build and test, only when
 # one is missing. Run by `make check`, `make demo` and `make bench`.
-pkgs="g++ make pkg-config libglm-dev libstb-dev libtinyexr-dev libgtest-dev groff-base libssh-dev libssl-dev openssh-client openssh-server"
+pkgs="g++ make pkg-config libglm-dev libstb-dev libtinyexr-dev libgtest-dev groff-base libssh-dev libssl-dev openssh-client openssh-server libcpp-httplib-dev"
 missing=""
 for p in $pkgs; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing="$missing $p"
 done
 # The fuzz targets (make fuzz; make check runs them briefly) need clang and
-# libFuzzer; without them make check skips that test, so a failure to
-# install these is only a warning.
-fuzz_pkgs="clang libclang-rt-dev"
-fuzz_missing=""
-for p in $fuzz_pkgs; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || fuzz_missing="$fuzz_missing $p"
+# libFuzzer, and tests/view.sh a browser (headless Chromium); without them
+# make check skips those tests, so a failure to install these is only a
+# warning.
+optional_pkgs="clang libclang-rt-dev chromium"
+optional_missing=""
+for p in $optional_pkgs; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || optional_missing="$optional_missing $p"
 done
-[ -z "$missing" ] && [ -z "$fuzz_missing" ] && exit 0
-echo "radiosity: installing missing Debian packages:$missing$fuzz_missing"
+[ -z "$missing" ] && [ -z "$optional_missing" ] && exit 0
+echo "radiosity: installing missing Debian packages:$missing$optional_missing"
 SUDO=""
 if [ "$(id -u)" != 0 ]; then
   if command -v sudo >/dev/null 2>&1; then SUDO=sudo; elif [ -n "$missing" ]; then
     echo "radiosity: need root (or sudo) to install:$missing" >&2; exit 1; else
-    echo "radiosity: warning: need root (or sudo) to install:$fuzz_missing; the fuzz test will be skipped" >&2; exit 0; fi
+    echo "radiosity: warning: need root (or sudo) to install:$optional_missing; the fuzz and view tests will be skipped" >&2; exit 0; fi
 fi
 $SUDO apt-get update -q || { [ -z "$missing" ] || {
   echo "radiosity: could not install:$missing (apt-get update failed; install them by hand)" >&2
@@ -31,8 +32,8 @@ if [ -n "$missing" ]; then
     exit 1
   }
 fi
-if [ -n "$fuzz_missing" ]; then
-  $SUDO apt-get install -y -q $fuzz_missing ||
-    echo "radiosity: warning: could not install:$fuzz_missing; the fuzz test will be skipped" >&2
+if [ -n "$optional_missing" ]; then
+  $SUDO apt-get install -y -q $optional_missing ||
+    echo "radiosity: warning: could not install:$optional_missing; the fuzz and view tests will be skipped" >&2
 fi
 exit 0

@@ -347,6 +347,24 @@ TEST(Options, BadEndpoints) {
             0u);
 }
 
+TEST(Options, ViewIsOnLoopbackUnlessAHostIsNamed) {
+  Options o = Parses({"s.obj"});
+  EXPECT_EQ(o.view, "");
+  o = Parses({"--view", "8080", "s.obj"});
+  EXPECT_EQ(o.view_host, "127.0.0.1");
+  EXPECT_EQ(o.view_port, 8080);
+  o = Parses({"--view", "0.0.0.0:0", "s.obj"});
+  EXPECT_EQ(o.view_host, "0.0.0.0");
+  EXPECT_EQ(o.view_port, 0);
+  EXPECT_EQ(Parses({"--view", "[::1]:9000", "s.obj"}).view_host, "::1");
+  EXPECT_EQ(Error({"--view", "70000", "s.obj"}),
+            "--view '70000': bad port '70000' (must be 0 to 65535) (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--view", "", "s.obj"}),
+            "--view '': needs a name, not an empty string (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--view", ":80", "s.obj"}),
+            "--view ':80': empty host before ':' (try 'radiosity --help')");
+}
+
 TEST(Options, Worker) {
   Files f;
   Options o;
