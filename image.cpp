@@ -384,63 +384,95 @@ bool WriteImage(const Image& img, float exposure, const std::string& path,
 bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
               std::string* err) {
   CheckPolys(mesh);
-  std::string s = "ply\nformat ascii 1.0\n"
-                  "comment radiosity: vertex colours are exposed, sRGB-encoded radiosity\n";
-  s += "element vertex " + std::to_string(mesh.positions.size()) + "\n";
-  s += "property float x\nproperty float y\nproperty float z\n"
-       "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-  s += "element face " + std::to_string(mesh.polys.size()) + "\n";
-  s += "property list uchar int vertex_indices\nend_header\n";
-  char line[128];
-  for (size_t i = 0; i < mesh.positions.size(); ++i) {
-    const glm::dvec3& p = mesh.positions[i];
-    const glm::vec3& c = mesh.colors[i];
-    // %.9g: a float survives the round trip through text.
-    std::snprintf(line, sizeof line, "%.9g %.9g %.9g %d %d %d\n", double(float(p.x)),
-                  double(float(p.y)), double(float(p.z)), Encode(c.r, exposure),
-                  Encode(c.g, exposure), Encode(c.b, exposure));
-    s += line;
-  }
-  for (const auto& q : mesh.polys) {
-    if (q[3] < 0)
-      std::snprintf(line, sizeof line, "3 %d %d %d\n", q[0], q[1], q[2]);
-    else
-      std::snprintf(line, sizeof line, "4 %d %d %d %d\n", q[0], q[1], q[2], q[3]);
-    s += line;
-  }
-  return WriteFileAtomic(path, s, err);
+  return WriteFileAtomic(path, [&](const FileSink& put) {
+    std::string s = "ply\nformat ascii 1.0\n"
+                    "comment radiosity: vertex colours are exposed, sRGB-encoded radiosity\n";
+    s += "element vertex " + std::to_string(mesh.positions.size()) + "\n";
+    s += "property float x\nproperty float y\nproperty float z\n"
+         "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    s += "element face " + std::to_string(mesh.polys.size()) + "\n";
+    s += "property list uchar int vertex_indices\nend_header\n";
+    // Written out a megabyte at a time: the whole text is some 270 bytes
+    // an element.
+    auto flush = [&](size_t at_least) {
+      if (s.size() < at_least) return true;
+      const bool ok = put(s.data(), s.size());
+      s.clear();
+      return ok;
+    };
+    char line[128];
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+      const glm::dvec3& p = mesh.positions[i];
+      const glm::vec3& c = mesh.colors[i];
+      // %.9g: a float survives the round trip through text.
+      std::snprintf(line, sizeof line, "%.9g %.9g %.9g %d %d %d\n", double(float(p.x)),
+                    double(float(p.y)), double(float(p.z)), Encode(c.r, exposure),
+                    Encode(c.g, exposure), Encode(c.b, exposure));
+      s += line;
+      if (!flush(1 << 20)) return false;
+    }
+    for (const auto& q : mesh.polys) {
+      if (q[3] < 0)
+        std::snprintf(line, sizeof line, "3 %d %d %d\n", q[0], q[1], q[2]);
+      else
+        std::snprintf(line, sizeof line, "4 %d %d %d %d\n", q[0], q[1], q[2], q[3]);
+      s += line;
+      if (!flush(1 << 20)) return false;
+    }
+    return flush(0);
+  }, err);
 }
 
 bool WriteGltf(const ShadedMesh& mesh, float exposure, const std::string& gltf_path,
                const std::string& bin_path, std::string* err) {
   CheckPolys(mesh);
   const size_t n = mesh.positions.size();
-  std::vector<float> pos, col;
-  std::vector<uint32_t> idx;
-  pos.reserve(3 * n);
-  col.reserve(3 * n);
   float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
   for (size_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {
       const float p = float(mesh.positions[i][k]);
-      pos.push_back(p);
       lo[k] = std::min(lo[k], p);
       hi[k] = std::max(hi[k], p);
-      const float c = mesh.colors[i][k] * exposure;
-      col.push_back(c > 0 ? std::min(c, 1.0f) : 0.0f);  // also NaN to 0
     }
-  for (const auto& q : mesh.polys) {
-    idx.insert(idx.end(), {uint32_t(q[0]), uint32_t(q[1]), uint32_t(q[2])});
-    if (q[3] >= 0) idx.insert(idx.end(), {uint32_t(q[0]), uint32_t(q[2]), uint32_t(q[3])});
-  }
-  // glTF buffers are little-endian, as is every machine this builds on
-  // (x86-64, arm64); the values are copied as they lie in memory.
-  const size_t pos_bytes = pos.size() * 4, col_bytes = col.size() * 4, idx_bytes = idx.size() * 4;
-  std::vector<char> bin(pos_bytes + col_bytes + idx_bytes);
-  if (pos_bytes) std::memcpy(bin.data(), pos.data(), pos_bytes);
-  if (col_bytes) std::memcpy(bin.data() + pos_bytes, col.data(), col_bytes);
-  if (idx_bytes) std::memcpy(bin.data() + pos_bytes + col_bytes, idx.data(), idx_bytes);
   if (n == 0) lo[0] = lo[1] = lo[2] = hi[0] = hi[1] = hi[2] = 0;
+  size_t nidx = 0;
+  for (const auto& q : mesh.polys) nidx += q[3] >= 0 ? 6 : 3;
+  const size_t pos_bytes = 12 * n, col_bytes = 12 * n, idx_bytes = 4 * nidx;
+  const size_t bin_size = pos_bytes + col_bytes + idx_bytes;
+  // The buffer goes out in pieces of a few thousand values (it is some 60
+  // bytes an element): positions, colours, then indices. glTF buffers are
+  // little-endian, as is every machine this builds on (x86-64, arm64); the
+  // values are copied as they lie in memory.
+  const bool bin_ok = WriteFileAtomic(bin_path, [&](const FileSink& put) {
+    std::vector<float> f;
+    std::vector<uint32_t> u;
+    constexpr size_t kPiece = 1 << 16;
+    auto send = [&](auto* v) {
+      const bool ok = v->empty() || put(reinterpret_cast<const char*>(v->data()), 4 * v->size());
+      v->clear();
+      return ok;
+    };
+    for (size_t i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) f.push_back(float(mesh.positions[i][k]));
+      if (f.size() >= kPiece && !send(&f)) return false;
+    }
+    if (!send(&f)) return false;
+    for (size_t i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        const float c = mesh.colors[i][k] * exposure;
+        f.push_back(c > 0 ? std::min(c, 1.0f) : 0.0f);  // also NaN to 0
+      }
+      if (f.size() >= kPiece && !send(&f)) return false;
+    }
+    if (!send(&f)) return false;
+    for (const auto& q : mesh.polys) {
+      u.insert(u.end(), {uint32_t(q[0]), uint32_t(q[1]), uint32_t(q[2])});
+      if (q[3] >= 0) u.insert(u.end(), {uint32_t(q[0]), uint32_t(q[2]), uint32_t(q[3])});
+      if (u.size() >= kPiece && !send(&u)) return false;
+    }
+    return send(&u);
+  }, err);
+  if (!bin_ok) return false;
 
   const size_t slash = bin_path.rfind('/');
   const std::string uri = slash == std::string::npos ? bin_path : bin_path.substr(slash + 1);
@@ -471,9 +503,9 @@ bool WriteGltf(const ShadedMesh& mesh, float exposure, const std::string& gltf_p
       "    {\"bufferView\": 2, \"componentType\": 5125, \"count\": %zu, \"type\": \"SCALAR\"}\n"
       "  ]\n"
       "}\n",
-      JsonString(uri).c_str(), bin.size(), pos_bytes, pos_bytes, col_bytes, pos_bytes + col_bytes,
+      JsonString(uri).c_str(), bin_size, pos_bytes, pos_bytes, col_bytes, pos_bytes + col_bytes,
       idx_bytes, n, double(lo[0]), double(lo[1]), double(lo[2]), double(hi[0]), double(hi[1]),
-      double(hi[2]), n, idx.size());
+      double(hi[2]), n, nidx);
   const std::string json = buf;
-  return WriteFileAtomic(bin_path, std::string(bin.begin(), bin.end()), err) && WriteFileAtomic(gltf_path, json, err);
+  return WriteFileAtomic(gltf_path, json, err);
 }
