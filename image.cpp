@@ -166,19 +166,19 @@ void DrawTriangle(const ScreenVert& a, ScreenVert b, ScreenVert c,
 }
 
 double PolyArea(const ShadedMesh& mesh, const std::array<int, 4>& q) {
-  const glm::dvec3& p0 = mesh.positions[q[0]];
-  const glm::dvec3& p1 = mesh.positions[q[1]];
-  const glm::dvec3& p2 = mesh.positions[q[2]];
+  const glm::dvec3& p0 = mesh.positions()[q[0]];
+  const glm::dvec3& p1 = mesh.positions()[q[1]];
+  const glm::dvec3& p2 = mesh.positions()[q[2]];
   if (q[3] < 0) return 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
   // A planar quad's area is half the cross product of its diagonals.
-  return 0.5 * glm::length(glm::cross(p2 - p0, mesh.positions[q[3]] - p1));
+  return 0.5 * glm::length(glm::cross(p2 - p0, mesh.positions()[q[3]] - p1));
 }
 
 int PolySize(const std::array<int, 4>& q) { return q[3] < 0 ? 3 : 4; }
 
 void CheckPolys(const ShadedMesh& mesh) {
-  CHECK(mesh.colors.size() == mesh.positions.size());
-  const int n = int(mesh.positions.size());
+  CHECK(mesh.colors.size() == mesh.positions().size());
+  const int n = int(mesh.positions().size());
   for (const auto& q : mesh.polys)
     for (int k = 0; k < PolySize(q); ++k) CHECK(q[k] >= 0 && q[k] < n);
 }
@@ -273,20 +273,25 @@ void Render(const ShadedMesh& mesh, const Camera& cam, int width, int height,
     return s;
   };
 
-  // Per vertex: camera-space position, whether it needs clipping, and (if
-  // not) its projection, shared by every polygon around it.
-  const size_t nv = mesh.positions.size();
-  std::vector<ClipVert> cv(nv);
+  // Per vertex: whether it needs clipping, and (if not) its projection,
+  // shared by every polygon around it. The camera-space position is
+  // computed again where a polygon is clipped rather than kept for every
+  // vertex (40 bytes a vertex).
+  const std::vector<glm::dvec3>& pos = mesh.positions();
+  auto camera = [&](int i) {
+    const glm::dvec3 r = pos[size_t(i)] - cam.eye;
+    return ClipVert{{glm::dot(r, right), glm::dot(r, up), glm::dot(r, fwd)}, mesh.colors[size_t(i)]};
+  };
+  const size_t nv = pos.size();
   std::vector<ScreenVert> sv(nv);
   std::vector<uint8_t> state(nv);  // 0 invalid, 1 needs clipping, 2 inside
   for (size_t i = 0; i < nv; ++i) {
-    const glm::dvec3 r = mesh.positions[i] - cam.eye;
-    cv[i] = {{glm::dot(r, right), glm::dot(r, up), glm::dot(r, fwd)}, mesh.colors[i]};
-    if (!std::isfinite(cv[i].p.x) || !std::isfinite(cv[i].p.y) || !std::isfinite(cv[i].p.z)) continue;
+    const ClipVert cv = camera(int(i));
+    if (!std::isfinite(cv.p.x) || !std::isfinite(cv.p.y) || !std::isfinite(cv.p.z)) continue;
     bool inside = true;
-    for (int k = 0; k < Frustum::kPlanes; ++k) inside = inside && frustum.Dist(k, cv[i].p) >= 0;
+    for (int k = 0; k < Frustum::kPlanes; ++k) inside = inside && frustum.Dist(k, cv.p) >= 0;
     state[i] = inside ? 2 : 1;
-    if (inside) sv[i] = project(cv[i]);
+    if (inside) sv[i] = project(cv);
   }
 
   std::vector<float> depth(size_t(width) * height, 0.0f);
@@ -299,7 +304,7 @@ void Render(const ShadedMesh& mesh, const Camera& cam, int width, int height,
         DrawTriangle(sv[a], sv[b], sv[c], target);
         continue;
       }
-      ClipVert buf[2][kMaxClipVerts] = {{cv[a], cv[b], cv[c]}, {}};
+      ClipVert buf[2][kMaxClipVerts] = {{camera(a), camera(b), camera(c)}, {}};
       int n = 3, cur = 0;
       for (int plane = 0; plane < Frustum::kPlanes && n >= 3; ++plane) {
         n = ClipPlane(frustum, plane, buf[cur], n, buf[1 - cur]);
@@ -324,7 +329,7 @@ float AutoExposure(const ShadedMesh& mesh) {
   constexpr double kPercentile = 0.95;
   constexpr double kWhite = 0.8;
   CheckPolys(mesh);
-  std::vector<double> weight(mesh.positions.size(), 0.0);
+  std::vector<double> weight(mesh.positions().size(), 0.0);
   for (const auto& q : mesh.polys) {
     const double a = PolyArea(mesh, q);
     if (!std::isfinite(a)) continue;
@@ -387,7 +392,7 @@ bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
   return WriteFileAtomic(path, [&](const FileSink& put) {
     std::string s = "ply\nformat ascii 1.0\n"
                     "comment radiosity: vertex colours are exposed, sRGB-encoded radiosity\n";
-    s += "element vertex " + std::to_string(mesh.positions.size()) + "\n";
+    s += "element vertex " + std::to_string(mesh.positions().size()) + "\n";
     s += "property float x\nproperty float y\nproperty float z\n"
          "property uchar red\nproperty uchar green\nproperty uchar blue\n";
     s += "element face " + std::to_string(mesh.polys.size()) + "\n";
@@ -401,8 +406,8 @@ bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
       return ok;
     };
     char line[128];
-    for (size_t i = 0; i < mesh.positions.size(); ++i) {
-      const glm::dvec3& p = mesh.positions[i];
+    for (size_t i = 0; i < mesh.positions().size(); ++i) {
+      const glm::dvec3& p = mesh.positions()[i];
       const glm::vec3& c = mesh.colors[i];
       // %.9g: a float survives the round trip through text.
       std::snprintf(line, sizeof line, "%.9g %.9g %.9g %d %d %d\n", double(float(p.x)),
@@ -426,11 +431,11 @@ bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
 bool WriteGltf(const ShadedMesh& mesh, float exposure, const std::string& gltf_path,
                const std::string& bin_path, std::string* err) {
   CheckPolys(mesh);
-  const size_t n = mesh.positions.size();
+  const size_t n = mesh.positions().size();
   float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
   for (size_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {
-      const float p = float(mesh.positions[i][k]);
+      const float p = float(mesh.positions()[i][k]);
       lo[k] = std::min(lo[k], p);
       hi[k] = std::max(hi[k], p);
     }
@@ -453,7 +458,7 @@ bool WriteGltf(const ShadedMesh& mesh, float exposure, const std::string& gltf_p
       return ok;
     };
     for (size_t i = 0; i < n; ++i) {
-      for (int k = 0; k < 3; ++k) f.push_back(float(mesh.positions[i][k]));
+      for (int k = 0; k < 3; ++k) f.push_back(float(mesh.positions()[i][k]));
       if (f.size() >= kPiece && !send(&f)) return false;
     }
     if (!send(&f)) return false;

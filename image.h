@@ -13,7 +13,12 @@
 // What to draw: polygons (triangles, or convex planar quads) with a linear
 // radiosity (RGB) at every vertex, interpolated across (Gouraud).
 struct ShadedMesh {
-  std::vector<glm::dvec3> positions;
+  // The points, double: Shade lends the mesh's own vertices (`lent`, not a
+  // copy: 24 bytes a vertex, 50 an element); a mesh made by hand keeps
+  // them in `own`.
+  const std::vector<glm::dvec3>& positions() const { return lent ? *lent : own; }
+  std::vector<glm::dvec3> own;
+  const std::vector<glm::dvec3>* lent = nullptr;
   // float: only drawn, after exposure, into 8 bits; positions stay double.
   std::vector<glm::vec3> colors;          // linear radiosity, >= 0
   std::vector<std::array<int, 4>> polys;  // vertex ids, CCW; [3] < 0: triangle

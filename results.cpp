@@ -272,7 +272,7 @@ bool LogCsv::Close(std::string* err) {
 
 ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   ShadedMesh s;
-  s.positions = mesh.verts;
+  s.lent = &mesh.verts;
   std::vector<glm::dvec3> sum(mesh.verts.size(), glm::dvec3(0.0));
   std::vector<double> w(mesh.verts.size(), 0.0);
   std::vector<int> t_leaves;  // leaves with T-vertices on their edges
