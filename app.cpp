@@ -386,6 +386,7 @@ void MasterRun::Run() {
                       [this](const std::string& line, bool warning) { Note(line, warning); });
   transport_->Shutdown();
   transport_.reset();  // with -j 0 the hemicube's buffers, freed before the pictures
+  ReleaseEdges(&mesh_);  // and subdivision's edge maps: nothing is divided after the run
   progress_->Finish();
   const RunResult& r = result_;
   if (opts_.verbosity >= 2)
