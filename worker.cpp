@@ -1,5 +1,7 @@
 #include "worker.h"
 
+#include <malloc.h>
+
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -217,6 +219,9 @@ int Worker::Run(std::string* err) {
   // Only the mesh is needed from here on: the scene (100-200 bytes a face)
   // is let go rather than kept for the whole run.
   setup.scene = Scene();
+  // Its hundreds of thousands of small blocks freed go back to the system
+  // (glibc keeps them otherwise), before the hemicube's arrays come.
+  malloc_trim(0);
   frame.clear();
   proto::EncodeReady({mesh_.elems.size(), MeshHash(mesh_)}, &frame);
   if (!out_.Send(frame)) return kExitOk;
