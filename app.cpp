@@ -1,6 +1,7 @@
 #include "app.h"
 
 #include <fcntl.h>
+#include <malloc.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -236,6 +237,7 @@ void MasterRun::Build() {
   StartWorkers();
   if (!opts_.resume_file.empty()) Resume();
   DropVertices(&scene_);  // hashed, sent and meshed: 120 bytes a face freed
+  malloc_trim(0);         // and given back to the system (glibc would keep them)
   if (!opts_.checkpoint_file.empty()) {
     run_.checkpoint_every = opts_.checkpoint_every;
     run_.checkpoint = [this](const RunState& state) { SaveCheckpoint(state); };
@@ -421,6 +423,7 @@ void MasterRun::Run() {
                       [this](const std::string& line, bool warning) { Note(line, warning); });
   transport_->Shutdown();
   transport_.reset();  // with -j 0 the hemicube's buffers, freed before the pictures
+  ReleaseEdges(&mesh_);  // and subdivision's edge maps: nothing is divided after the run
   progress_->Finish();
   const RunResult& r = result_;
   if (opts_.verbosity >= 2)

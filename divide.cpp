@@ -236,6 +236,14 @@ void ConnectEdges(Mesh* mesh) {
   mesh->border_count = border.size();
 }
 
+void ReleaseEdges(Mesh* mesh) {
+  for (auto* v : {&mesh->out_head, &mesh->out_next, &mesh->border}) std::vector<int32_t>().swap(*v);
+  std::vector<uint64_t>().swap(mesh->split);
+  std::vector<uint8_t>().swap(mesh->border_bits);
+  mesh->border_count = 0;
+  mesh->connected = false;
+}
+
 void Divide(Mesh* mesh, int32_t elem) {
   ConnectEdges(mesh);
   CHECK(elem >= 0 && size_t(elem) < mesh->elems.size() && mesh->elems[elem].IsLeaf());

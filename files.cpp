@@ -22,9 +22,9 @@ std::string Bytes(uint64_t n) {
                                                   : std::to_string(n) + " bytes";
 }
 
-bool WriteAll(int fd, const std::string& data) {
-  for (size_t done = 0; done < data.size();) {
-    const ssize_t n = ::write(fd, data.data() + done, data.size() - done);
+bool WriteAll(int fd, const char* data, size_t size) {
+  for (size_t done = 0; done < size;) {
+    const ssize_t n = ::write(fd, data + done, size - done);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
       if (n == 0) errno = EIO;
@@ -135,6 +135,12 @@ std::string Unwritable(const std::string& path, const std::vector<Input>& inputs
 
 bool WriteFileAtomic(const std::string& path, const std::string& data, std::string* err,
                      bool sync) {
+  return WriteFileAtomic(
+      path, [&](const FileSink& put) { return put(data.data(), data.size()); }, err, sync);
+}
+
+bool WriteFileAtomic(const std::string& path, const std::function<bool(const FileSink&)>& body,
+                     std::string* err, bool sync) {
   const std::string why = Unwritable(path, {});
   if (!why.empty()) {
     *err = path + ": " + why + "; not replaced";
@@ -146,7 +152,8 @@ bool WriteFileAtomic(const std::string& path, const std::string& data, std::stri
     *err = path + ": cannot create a file in " + DirName(path) + ": " + std::strerror(errno);
     return false;
   }
-  bool ok = ::fchmod(fd, CreateMode()) == 0 && WriteAll(fd, data) && (!sync || ::fsync(fd) == 0);
+  const FileSink put = [fd](const char* data, size_t size) { return WriteAll(fd, data, size); };
+  bool ok = ::fchmod(fd, CreateMode()) == 0 && body(put) && (!sync || ::fsync(fd) == 0);
   const int e = errno;
   ok = ::close(fd) == 0 && ok;
   if (ok && ::rename(tmp.c_str(), path.c_str()) == 0) return true;

@@ -66,6 +66,13 @@ std::string Unwritable(const std::string& path, const std::vector<Input>& inputs
 // one). *err = "PATH: what".
 bool WriteFileAtomic(const std::string& path, const std::string& data, std::string* err,
                      bool sync = false);
+// The same for a file written piece by piece: `body` hands its bytes to
+// the sink (false: a write failed, errno says why) and returns whether all
+// went, so that a large output (the PLY, glTF buffer of 10^6 elements:
+// hundreds of MB) is never held whole in memory.
+using FileSink = std::function<bool(const char* data, size_t size)>;
+bool WriteFileAtomic(const std::string& path, const std::function<bool(const FileSink&)>& body,
+                     std::string* err, bool sync = false);
 
 // The directory of PATH: "." for a bare name.
 std::string DirName(const std::string& path);

@@ -217,7 +217,11 @@ void Hemicube::BuildCache(const Mesh& mesh) {
   // z-buffer draws the leaves in, which breaks depth ties).
   std::vector<CacheFace> byface;
   std::vector<int> leaves;
+  // Reserved to their sizes (an upper bound for byface): grown by doubling,
+  // the two copies of faces were the largest thing a -j 0 master held.
+  byface.reserve(mesh.faces.size());
   elem_.clear();
+  elem_.reserve(size_t(mesh.LeafCount()));
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const MeshFace& mf = mesh.faces[f];
     CacheFace cf;
@@ -248,6 +252,7 @@ void Hemicube::BuildCache(const Mesh& mesh) {
   // Then laid out in the hierarchy's order, the order a column reads them:
   // each face's vertices and its leaves' outlines together.
   faces_.clear();
+  faces_.reserve(order.size());
   by_face_.assign(order.size(), 0);
   outline_.clear();
   outline_at_.assign(1, 0);

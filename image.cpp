@@ -168,19 +168,19 @@ void DrawTriangle(const ScreenVert& a, ScreenVert b, ScreenVert c,
 }
 
 double PolyArea(const ShadedMesh& mesh, const std::array<int, 4>& q) {
-  const glm::dvec3& p0 = mesh.positions[q[0]];
-  const glm::dvec3& p1 = mesh.positions[q[1]];
-  const glm::dvec3& p2 = mesh.positions[q[2]];
+  const glm::dvec3& p0 = mesh.positions()[q[0]];
+  const glm::dvec3& p1 = mesh.positions()[q[1]];
+  const glm::dvec3& p2 = mesh.positions()[q[2]];
   if (q[3] < 0) return 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
   // A planar quad's area is half the cross product of its diagonals.
-  return 0.5 * glm::length(glm::cross(p2 - p0, mesh.positions[q[3]] - p1));
+  return 0.5 * glm::length(glm::cross(p2 - p0, mesh.positions()[q[3]] - p1));
 }
 
 int PolySize(const std::array<int, 4>& q) { return q[3] < 0 ? 3 : 4; }
 
 void CheckPolys(const ShadedMesh& mesh) {
-  CHECK(mesh.colors.size() == mesh.positions.size());
-  const int n = int(mesh.positions.size());
+  CHECK(mesh.colors.size() == mesh.positions().size());
+  const int n = int(mesh.positions().size());
   for (const auto& q : mesh.polys)
     for (int k = 0; k < PolySize(q); ++k) CHECK(q[k] >= 0 && q[k] < n);
 }
@@ -274,20 +274,25 @@ void Render(const ShadedMesh& mesh, const Camera& cam, int width, int height,
     return s;
   };
 
-  // Per vertex: camera-space position, whether it needs clipping, and (if
-  // not) its projection, shared by every polygon around it.
-  const size_t nv = mesh.positions.size();
-  std::vector<ClipVert> cv(nv);
+  // Per vertex: whether it needs clipping, and (if not) its projection,
+  // shared by every polygon around it. The camera-space position is
+  // computed again where a polygon is clipped rather than kept for every
+  // vertex (40 bytes a vertex).
+  const std::vector<glm::dvec3>& pos = mesh.positions();
+  auto camera = [&](int i) {
+    const glm::dvec3 r = pos[size_t(i)] - cam.eye;
+    return ClipVert{{glm::dot(r, right), glm::dot(r, up), glm::dot(r, fwd)}, mesh.colors[size_t(i)]};
+  };
+  const size_t nv = pos.size();
   std::vector<ScreenVert> sv(nv);
   std::vector<uint8_t> state(nv);  // 0 invalid, 1 needs clipping, 2 inside
   for (size_t i = 0; i < nv; ++i) {
-    const glm::dvec3 r = mesh.positions[i] - cam.eye;
-    cv[i] = {{glm::dot(r, right), glm::dot(r, up), glm::dot(r, fwd)}, mesh.colors[i]};
-    if (!std::isfinite(cv[i].p.x) || !std::isfinite(cv[i].p.y) || !std::isfinite(cv[i].p.z)) continue;
+    const ClipVert cv = camera(int(i));
+    if (!std::isfinite(cv.p.x) || !std::isfinite(cv.p.y) || !std::isfinite(cv.p.z)) continue;
     bool inside = true;
-    for (int k = 0; k < Frustum::kPlanes; ++k) inside = inside && frustum.Dist(k, cv[i].p) >= 0;
+    for (int k = 0; k < Frustum::kPlanes; ++k) inside = inside && frustum.Dist(k, cv.p) >= 0;
     state[i] = inside ? 2 : 1;
-    if (inside) sv[i] = project(cv[i]);
+    if (inside) sv[i] = project(cv);
   }
 
   std::vector<float> depth(size_t(width) * height, 0.0f);
@@ -300,7 +305,7 @@ void Render(const ShadedMesh& mesh, const Camera& cam, int width, int height,
         DrawTriangle(sv[a], sv[b], sv[c], target);
         continue;
       }
-      ClipVert buf[2][kMaxClipVerts] = {{cv[a], cv[b], cv[c]}, {}};
+      ClipVert buf[2][kMaxClipVerts] = {{camera(a), camera(b), camera(c)}, {}};
       int n = 3, cur = 0;
       for (int plane = 0; plane < Frustum::kPlanes && n >= 3; ++plane) {
         n = ClipPlane(frustum, plane, buf[cur], n, buf[1 - cur]);
@@ -325,13 +330,16 @@ float AutoExposure(const ShadedMesh& mesh) {
   constexpr double kPercentile = 0.95;
   constexpr double kWhite = 0.8;
   CheckPolys(mesh);
-  std::vector<double> weight(mesh.positions.size(), 0.0);
+  std::vector<double> weight(mesh.positions().size(), 0.0);
   for (const auto& q : mesh.polys) {
     const double a = PolyArea(mesh, q);
     if (!std::isfinite(a)) continue;
     for (int k = 0; k < PolySize(q); ++k) weight[q[k]] += a / PolySize(q);
   }
+  // Reserved to the size it ends at: grown by doubling it took up to 32
+  // bytes a vertex, the master's largest allocation at the end of a run.
   std::vector<std::pair<double, double>> lw;  // (luminance, weight)
+  lw.reserve(size_t(std::count_if(weight.begin(), weight.end(), [](double w) { return w > 0; })));
   double total = 0, brightest = 0;
   for (size_t i = 0; i < weight.size(); ++i) {
     if (!(weight[i] > 0)) continue;
@@ -342,6 +350,7 @@ float AutoExposure(const ShadedMesh& mesh) {
     total += weight[i];
     brightest = std::max(brightest, lum);
   }
+  std::vector<double>().swap(weight);
   std::sort(lw.begin(), lw.end());
   double level = 0, sum = 0;
   for (const auto& [lum, w] : lw) {
@@ -399,63 +408,95 @@ bool WriteRadianceHdr(const Image& img, const std::string& path, std::string* er
 bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
               std::string* err) {
   CheckPolys(mesh);
-  std::string s = "ply\nformat ascii 1.0\n"
-                  "comment radiosity: vertex colours are exposed, sRGB-encoded radiosity\n";
-  s += "element vertex " + std::to_string(mesh.positions.size()) + "\n";
-  s += "property float x\nproperty float y\nproperty float z\n"
-       "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-  s += "element face " + std::to_string(mesh.polys.size()) + "\n";
-  s += "property list uchar int vertex_indices\nend_header\n";
-  char line[128];
-  for (size_t i = 0; i < mesh.positions.size(); ++i) {
-    const glm::dvec3& p = mesh.positions[i];
-    const glm::vec3& c = mesh.colors[i];
-    // %.9g: a float survives the round trip through text.
-    std::snprintf(line, sizeof line, "%.9g %.9g %.9g %d %d %d\n", double(float(p.x)),
-                  double(float(p.y)), double(float(p.z)), Encode(c.r, exposure),
-                  Encode(c.g, exposure), Encode(c.b, exposure));
-    s += line;
-  }
-  for (const auto& q : mesh.polys) {
-    if (q[3] < 0)
-      std::snprintf(line, sizeof line, "3 %d %d %d\n", q[0], q[1], q[2]);
-    else
-      std::snprintf(line, sizeof line, "4 %d %d %d %d\n", q[0], q[1], q[2], q[3]);
-    s += line;
-  }
-  return WriteFileAtomic(path, s, err);
+  return WriteFileAtomic(path, [&](const FileSink& put) {
+    std::string s = "ply\nformat ascii 1.0\n"
+                    "comment radiosity: vertex colours are exposed, sRGB-encoded radiosity\n";
+    s += "element vertex " + std::to_string(mesh.positions().size()) + "\n";
+    s += "property float x\nproperty float y\nproperty float z\n"
+         "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    s += "element face " + std::to_string(mesh.polys.size()) + "\n";
+    s += "property list uchar int vertex_indices\nend_header\n";
+    // Written out a megabyte at a time: the whole text is some 270 bytes
+    // an element.
+    auto flush = [&](size_t at_least) {
+      if (s.size() < at_least) return true;
+      const bool ok = put(s.data(), s.size());
+      s.clear();
+      return ok;
+    };
+    char line[128];
+    for (size_t i = 0; i < mesh.positions().size(); ++i) {
+      const glm::dvec3& p = mesh.positions()[i];
+      const glm::vec3& c = mesh.colors[i];
+      // %.9g: a float survives the round trip through text.
+      std::snprintf(line, sizeof line, "%.9g %.9g %.9g %d %d %d\n", double(float(p.x)),
+                    double(float(p.y)), double(float(p.z)), Encode(c.r, exposure),
+                    Encode(c.g, exposure), Encode(c.b, exposure));
+      s += line;
+      if (!flush(1 << 20)) return false;
+    }
+    for (const auto& q : mesh.polys) {
+      if (q[3] < 0)
+        std::snprintf(line, sizeof line, "3 %d %d %d\n", q[0], q[1], q[2]);
+      else
+        std::snprintf(line, sizeof line, "4 %d %d %d %d\n", q[0], q[1], q[2], q[3]);
+      s += line;
+      if (!flush(1 << 20)) return false;
+    }
+    return flush(0);
+  }, err);
 }
 
 bool WriteGltf(const ShadedMesh& mesh, float exposure, const std::string& gltf_path,
                const std::string& bin_path, std::string* err) {
   CheckPolys(mesh);
-  const size_t n = mesh.positions.size();
-  std::vector<float> pos, col;
-  std::vector<uint32_t> idx;
-  pos.reserve(3 * n);
-  col.reserve(3 * n);
+  const size_t n = mesh.positions().size();
   float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
   for (size_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {
-      const float p = float(mesh.positions[i][k]);
-      pos.push_back(p);
+      const float p = float(mesh.positions()[i][k]);
       lo[k] = std::min(lo[k], p);
       hi[k] = std::max(hi[k], p);
-      const float c = mesh.colors[i][k] * exposure;
-      col.push_back(c > 0 ? std::min(c, 1.0f) : 0.0f);  // also NaN to 0
     }
-  for (const auto& q : mesh.polys) {
-    idx.insert(idx.end(), {uint32_t(q[0]), uint32_t(q[1]), uint32_t(q[2])});
-    if (q[3] >= 0) idx.insert(idx.end(), {uint32_t(q[0]), uint32_t(q[2]), uint32_t(q[3])});
-  }
-  // glTF buffers are little-endian, as is every machine this builds on
-  // (x86-64, arm64); the values are copied as they lie in memory.
-  const size_t pos_bytes = pos.size() * 4, col_bytes = col.size() * 4, idx_bytes = idx.size() * 4;
-  std::vector<char> bin(pos_bytes + col_bytes + idx_bytes);
-  if (pos_bytes) std::memcpy(bin.data(), pos.data(), pos_bytes);
-  if (col_bytes) std::memcpy(bin.data() + pos_bytes, col.data(), col_bytes);
-  if (idx_bytes) std::memcpy(bin.data() + pos_bytes + col_bytes, idx.data(), idx_bytes);
   if (n == 0) lo[0] = lo[1] = lo[2] = hi[0] = hi[1] = hi[2] = 0;
+  size_t nidx = 0;
+  for (const auto& q : mesh.polys) nidx += q[3] >= 0 ? 6 : 3;
+  const size_t pos_bytes = 12 * n, col_bytes = 12 * n, idx_bytes = 4 * nidx;
+  const size_t bin_size = pos_bytes + col_bytes + idx_bytes;
+  // The buffer goes out in pieces of a few thousand values (it is some 60
+  // bytes an element): positions, colours, then indices. glTF buffers are
+  // little-endian, as is every machine this builds on (x86-64, arm64); the
+  // values are copied as they lie in memory.
+  const bool bin_ok = WriteFileAtomic(bin_path, [&](const FileSink& put) {
+    std::vector<float> f;
+    std::vector<uint32_t> u;
+    constexpr size_t kPiece = 1 << 16;
+    auto send = [&](auto* v) {
+      const bool ok = v->empty() || put(reinterpret_cast<const char*>(v->data()), 4 * v->size());
+      v->clear();
+      return ok;
+    };
+    for (size_t i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) f.push_back(float(mesh.positions()[i][k]));
+      if (f.size() >= kPiece && !send(&f)) return false;
+    }
+    if (!send(&f)) return false;
+    for (size_t i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        const float c = mesh.colors[i][k] * exposure;
+        f.push_back(c > 0 ? std::min(c, 1.0f) : 0.0f);  // also NaN to 0
+      }
+      if (f.size() >= kPiece && !send(&f)) return false;
+    }
+    if (!send(&f)) return false;
+    for (const auto& q : mesh.polys) {
+      u.insert(u.end(), {uint32_t(q[0]), uint32_t(q[1]), uint32_t(q[2])});
+      if (q[3] >= 0) u.insert(u.end(), {uint32_t(q[0]), uint32_t(q[2]), uint32_t(q[3])});
+      if (u.size() >= kPiece && !send(&u)) return false;
+    }
+    return send(&u);
+  }, err);
+  if (!bin_ok) return false;
 
   const size_t slash = bin_path.rfind('/');
   const std::string uri = slash == std::string::npos ? bin_path : bin_path.substr(slash + 1);
@@ -486,9 +527,9 @@ bool WriteGltf(const ShadedMesh& mesh, float exposure, const std::string& gltf_p
       "    {\"bufferView\": 2, \"componentType\": 5125, \"count\": %zu, \"type\": \"SCALAR\"}\n"
       "  ]\n"
       "}\n",
-      JsonString(uri).c_str(), bin.size(), pos_bytes, pos_bytes, col_bytes, pos_bytes + col_bytes,
+      JsonString(uri).c_str(), bin_size, pos_bytes, pos_bytes, col_bytes, pos_bytes + col_bytes,
       idx_bytes, n, double(lo[0]), double(lo[1]), double(lo[2]), double(hi[0]), double(hi[1]),
-      double(hi[2]), n, idx.size());
+      double(hi[2]), n, nidx);
   const std::string json = buf;
-  return WriteFileAtomic(bin_path, std::string(bin.begin(), bin.end()), err) && WriteFileAtomic(gltf_path, json, err);
+  return WriteFileAtomic(gltf_path, json, err);
 }

@@ -13,7 +13,18 @@
 // What to draw: polygons (triangles, or convex planar quads) with a linear
 // radiosity (RGB) at every vertex, interpolated across (Gouraud).
 struct ShadedMesh {
-  std::vector<glm::dvec3> positions;
+  // The points, double: Shade lends the mesh's own vertices (`lent`, not a
+  // copy: 24 bytes a vertex, 50 an element); a mesh made by hand keeps
+  // them in `own`.
+  const std::vector<glm::dvec3>& positions() const { return lent ? *lent : own; }
+  std::vector<glm::dvec3> own;
+  const std::vector<glm::dvec3>* lent = nullptr;
+  // Copies lent points into `own`: for a copy that outlives the mesh's next
+  // division (the view server's threads read a snapshot later).
+  void Keep() {
+    if (lent) own = *lent;
+    lent = nullptr;
+  }
   // float: drawn into 8 bits after exposure, or written linear as RGBE
   // (8-bit mantissas) or EXR float, which a float holds exactly; positions
   // stay double.

@@ -10,11 +10,12 @@
 
 #include <string>
 
-// The master with -j 0: mesh, solver, subdivision's adjacency, the
-// hemicube and the pictures at the end of a wave (measured 604).
-constexpr double kMasterBytesPerElement = 700;
+// The master: mesh, solver, subdivision's adjacency, the hemicube (-j 0)
+// or the scene frame (with workers), the pictures at the end of a wave
+// (measured 432 with -j 0, 459 with -j 1, at 1.06 M elements).
+constexpr double kMasterBytesPerElement = 530;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
-// (measured 300).
+// (measured 305).
 constexpr double kWorkerBytesPerElement = 350;
 
 // Bytes this process may still use: physical memory, or less where

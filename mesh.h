@@ -198,6 +198,9 @@ void Divide(Mesh* mesh, int32_t elem);
 // Fills the adjacency arrays for the leaves (once; Divide() keeps them
 // since). Not done by BuildMesh: a run without subdivision needs none.
 void ConnectEdges(Mesh* mesh);
+// Frees them (about 40 bytes an element) where no division follows: the
+// master's pictures and outputs at the end of a run.
+void ReleaseEdges(Mesh* mesh);
 
 // The key of the edge a -> b: directed (a, b) or undirected (min, max).
 inline uint64_t EdgeKey(int a, int b) { return uint64_t(uint32_t(a)) << 32 | uint32_t(b); }

@@ -272,9 +272,7 @@ bool LogCsv::Close(std::string* err) {
 
 ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   ShadedMesh s;
-  s.positions = mesh.verts;
-  std::vector<glm::dvec3> sum(mesh.verts.size(), glm::dvec3(0.0));
-  std::vector<double> w(mesh.verts.size(), 0.0);
+  s.lent = &mesh.verts;
   std::vector<int> t_leaves;  // leaves with T-vertices on their edges
   for (size_t e = 0; e < mesh.elems.size(); ++e) {
     const Element& el = mesh.elems[e];
@@ -288,11 +286,6 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
     } else {
       t_leaves.push_back(int(e));
       for (int i = 1; i + 1 < m; ++i) s.polys.push_back({out[0], out[i], out[i + 1], -1});
-    }
-    const glm::dvec3 b = glm::max(elem_b[e], glm::dvec3(0.0));
-    for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
-      sum[el.v[k]] += b * el.area;
-      w[el.v[k]] += el.area;
     }
   }
   // Faces do not share vertices, but where two faces of one material lie in
@@ -344,27 +337,80 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   std::vector<int>().swap(face_of);
   // Most groups are one vertex, whose sums are its own (0 + x is x): sums
   // per group only for those joined (a group's members, then the index of
-  // its sums or -1).
+  // its sums or -1), and their members' own sums kept (`at`, in vertex
+  // order) until the groups' are summed.
   std::vector<int> joined(static_cast<size_t>(groups), 0);
   for (int g : group) ++joined[g];
   size_t njoined = 0;
   for (int& j : joined) j = j > 1 ? int(njoined++) : -1;
+  std::vector<int> at(mesh.verts.size(), -1);
+  size_t nmembers = 0;
+  for (size_t v = 0; v < at.size(); ++v)
+    if (joined[group[v]] >= 0) at[v] = int(nmembers++);
+  std::vector<glm::dvec3> msum(nmembers, glm::dvec3(0.0));
+  std::vector<double> mw(nmembers, 0.0);
+  // Each vertex's area-weighted sum over the leaves around it, a face at a
+  // time (its vertices are its own: 32 bytes for the face's vertices, not
+  // for every vertex of the mesh), its leaves in increasing id as a walk
+  // over all leaves would add them, so the sums are the same bits.
+  s.colors.resize(mesh.verts.size(), glm::vec3(0.0f));
+  std::vector<int> leaves, under;
+  std::vector<glm::dvec3> sum;
+  std::vector<double> w;
+  for (const MeshFace& f : mesh.faces) {
+    leaves.clear();
+    for (int p : f.patches) {
+      mesh.Leaves(p, &under);
+      leaves.insert(leaves.end(), under.begin(), under.end());
+    }
+    std::sort(leaves.begin(), leaves.end());
+    const int own = f.vend - f.vbegin;
+    auto local = [&](int v) {
+      return v < f.vend ? v - f.vbegin
+                        : own + int(std::lower_bound(f.divide_verts.begin(), f.divide_verts.end(), v) -
+                                    f.divide_verts.begin());
+    };
+    const size_t n = size_t(own) + f.divide_verts.size();
+    sum.assign(n, glm::dvec3(0.0));
+    w.assign(n, 0.0);
+    for (int e : leaves) {
+      const Element& el = mesh.elems[size_t(e)];
+      const glm::dvec3 b = glm::max(elem_b[size_t(e)], glm::dvec3(0.0));
+      for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
+        const int l = local(el.v[k]);
+        sum[size_t(l)] += b * el.area;
+        w[size_t(l)] += el.area;
+      }
+    }
+    auto put = [&](int v) {
+      const size_t l = size_t(local(v));
+      if (at[v] >= 0) {
+        msum[size_t(at[v])] = sum[l];
+        mw[size_t(at[v])] = w[l];
+      } else if (w[l] > 0) {
+        s.colors[v] = glm::vec3(sum[l] / w[l]);
+      }
+    };
+    for (int v = f.vbegin; v < f.vend; ++v) put(v);
+    for (int v : f.divide_verts) put(v);
+  }
   std::vector<glm::dvec3> gsum(njoined, glm::dvec3(0.0));
   std::vector<double> gw(njoined, 0.0);
-  for (size_t v = 0; v < sum.size(); ++v)
-    if (const int j = joined[group[v]]; j >= 0) {
-      gsum[j] += sum[v];
-      gw[j] += w[v];
+  for (size_t v = 0; v < at.size(); ++v)
+    if (at[v] >= 0) {
+      const int j = joined[group[v]];
+      gsum[j] += msum[size_t(at[v])];
+      gw[j] += mw[size_t(at[v])];
     }
-  s.colors.resize(mesh.verts.size(), glm::vec3(0.0f));
-  for (size_t v = 0; v < sum.size(); ++v) {
-    const int j = joined[group[v]];
-    const double weight = j >= 0 ? gw[j] : w[v];
-    if (weight > 0) s.colors[v] = glm::vec3((j >= 0 ? gsum[j] : sum[v]) / weight);
-  }
-  for (auto* x : {&sum, &gsum}) std::vector<glm::dvec3>().swap(*x);
-  for (auto* x : {&w, &gw}) std::vector<double>().swap(*x);
+  for (size_t v = 0; v < at.size(); ++v)
+    if (at[v] >= 0) {
+      const int j = joined[group[v]];
+      if (gw[j] > 0) s.colors[v] = glm::vec3(gsum[j] / gw[j]);
+    }
+  for (auto* x : {&sum, &gsum, &msum}) std::vector<glm::dvec3>().swap(*x);
+  for (auto* x : {&w, &gw, &mw}) std::vector<double>().swap(*x);
   std::vector<int>().swap(joined);
+  std::vector<int>().swap(at);
   // A T-vertex takes the value interpolated along the coarser edge it lies
   // on, so both sides shade that edge alike (no seam); so do the vertices
   // joined with it across coplanar faces. Coarser first: a corner of a

@@ -116,7 +116,6 @@ class Solver {
   bool overshoot_;
   std::vector<int> leaves_;         // scratch for Shoot
   std::vector<glm::dvec3> b_;       // per element
-  std::vector<glm::dvec3> rho_per_area_;  // per element: ρ / A, for Shoot
   std::vector<int32_t> patch_of_;   // per element, compact for Shoot
   std::vector<glm::dvec3> rho_;     // per patch: its face's, compact for Shoot
   std::vector<double> area_;        // per patch, likewise

@@ -70,12 +70,12 @@ std::string ViewStateJson(const ViewInfo& info, const ViewState& state,
 }
 
 std::string ViewMeshBlob(const ShadedMesh& mesh, float exposure) {
-  const size_t n = mesh.positions.size();
+  const size_t n = mesh.positions().size();
   size_t tris = 0;
   for (const auto& q : mesh.polys) tris += q[3] < 0 ? 1 : 2;
   CHECK(n <= UINT32_MAX && tris <= UINT32_MAX);
   glm::dvec3 lo(HUGE_VAL), hi(-HUGE_VAL);
-  for (const glm::dvec3& p : mesh.positions) {
+  for (const glm::dvec3& p : mesh.positions()) {
     lo = glm::min(lo, p);
     hi = glm::max(hi, p);
   }
@@ -87,7 +87,7 @@ std::string ViewMeshBlob(const ShadedMesh& mesh, float exposure) {
   PutFixed32(&out, uint32_t(tris));
   PutF32(&out, exposure);
   PutVec(&out, origin);
-  for (const glm::dvec3& p : mesh.positions)
+  for (const glm::dvec3& p : mesh.positions())
     for (int k = 0; k < 3; ++k) PutF32(&out, float(p[k] - origin[k]));
   for (const glm::vec3& c : mesh.colors)
     for (int k = 0; k < 3; ++k) PutF32(&out, c[k] > 0 ? c[k] : 0.0f);  // also NaN to 0

@@ -287,6 +287,7 @@ bool ViewServer::SnapshotDue() const {
 void ViewServer::Snapshot(long shots, const std::function<ShadedMesh()>& shade) {
   const double t0 = MonotonicSeconds();
   mesh_ = std::make_unique<ShadedMesh>(shade());
+  mesh_->Keep();  // the solver divides on while the server encodes this
   mesh_shots_ = shots;
   Hand();
   const double t1 = MonotonicSeconds();

@@ -1,5 +1,7 @@
 #include "worker.h"
 
+#include <malloc.h>
+
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -207,14 +209,19 @@ int Worker::Run(std::string* err) {
   proto::SceneSetup setup;
   if (type != proto::Msg::kScene || !proto::DecodeScene(payload, &setup, &why))
     return Fail("expected a scene: " + why, err);
+  // Decoded: the frame (25-50 bytes an element) is let go before the mesh
+  // is built beside the scene, the worker's peak.
+  std::string().swap(payload);
   if (!FitsInMemory(EstimateMesh(setup.scene, setup.mesh).elements, kWorkerBytesPerElement,
                     UsableMemory(), &why) ||
       !BuildMesh(setup.scene, setup.mesh, &mesh_, &why))
     return Fail(why, err);
-  // Only the mesh is needed from here on: the scene and its frame (each
-  // 100-200 bytes a face) are let go rather than kept for the whole run.
+  // Only the mesh is needed from here on: the scene (100-200 bytes a face)
+  // is let go rather than kept for the whole run.
   setup.scene = Scene();
-  std::string().swap(payload);
+  // Its hundreds of thousands of small blocks freed go back to the system
+  // (glibc keeps them otherwise), before the hemicube's arrays come.
+  malloc_trim(0);
   frame.clear();
   proto::EncodeReady({mesh_.elems.size(), MeshHash(mesh_)}, &frame);
   if (!out_.Send(frame)) return kExitOk;

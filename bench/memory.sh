@@ -5,9 +5,10 @@
 # of -j 1) and of the worker, bytes per element, and the load and mesh
 # seconds the program prints with -v ("-" for a binary that does not).
 # BEFORE, if set, is another binary run side by side (same scene, back to
-# back: the machine is noisy).
+# back: the machine is noisy); ARGS, if set, more options for every run
+# (ARGS=--no-groups: forming groups takes minutes at 10^6 elements).
 #   bash bench/memory.sh [N...]           (default 200 2000 20000 50000)
-#   BEFORE=/tmp/before/radiosity bash bench/memory.sh 20000
+#   BEFORE=/tmp/before/radiosity ARGS=--no-groups bash bench/memory.sh 40000
 cd "$(dirname "$0")/.." || exit 1
 RAD=${RADIOSITY:-$PWD/radiosity}
 GEN=${SCENEGEN:-$PWD/build/scenegen}
@@ -20,8 +21,8 @@ printf '|---|---|---|---|---|---|---|---|---|---|---|\n'
 for n in "$@"; do
   "$GEN" boxes "$n" "$T/b.obj" >/dev/null 2>&1 || exit 1
   for bin in ${BEFORE:+"$BEFORE"} "$RAD"; do
-    /usr/bin/time -f '%M' -o "$T/rss0" "$bin" -v -j 0 -s 2 --size 64x64 -o "$T/o0" "$T/b.obj" 2>"$T/err0"
-    /usr/bin/time -f '%M' -o "$T/rss1" "$bin" -q -j 1 -s 2 --size 64x64 -o "$T/o1" \
+    /usr/bin/time -f '%M' -o "$T/rss0" "$bin" -v -j 0 -s 2 --size 64x64 $ARGS -o "$T/o0" "$T/b.obj" 2>"$T/err0"
+    /usr/bin/time -f '%M' -o "$T/rss1" "$bin" -q -j 1 -s 2 --size 64x64 $ARGS -o "$T/o1" \
       --worker-cmd "/usr/bin/time -f %M -o $T/rssw $bin" "$T/b.obj" 2>/dev/null
     line=$(grep ' patches, .* elements' "$T/err0" | head -1)
     faces=$(echo "$line" | sed -n 's/^radiosity: \([0-9]*\) faces.*/\1/p')

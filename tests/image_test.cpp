@@ -22,8 +22,8 @@ namespace {
 void AddPoly(ShadedMesh* m, std::vector<glm::dvec3> ps, std::vector<glm::vec3> cs) {
   std::array<int, 4> q{-1, -1, -1, -1};
   for (size_t i = 0; i < ps.size(); ++i) {
-    q[i] = int(m->positions.size());
-    m->positions.push_back(ps[i]);
+    q[i] = int(m->own.size());
+    m->own.push_back(ps[i]);
     m->colors.push_back(cs.size() == 1 ? cs[0] : cs[i]);
   }
   m->polys.push_back(q);

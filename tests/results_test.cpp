@@ -101,8 +101,8 @@ TEST(Results, ShadingAveragesWithinAFaceAndAcrossCoplanarNeighbours) {
   Mesh m = MakeMesh(s, o);
   std::vector<glm::dvec3> b = {glm::dvec3(1.0), glm::dvec3(3.0), glm::dvec3(10.0)};
   ShadedMesh sh = Shade(m, b);
-  for (size_t v = 0; v < sh.positions.size(); ++v) {
-    const glm::dvec3& p = sh.positions[v];
+  for (size_t v = 0; v < sh.positions().size(); ++v) {
+    const glm::dvec3& p = sh.positions()[v];
     const int face = v < size_t(m.faces[1].vbegin) ? 0 : v < size_t(m.faces[2].vbegin) ? 1 : 2;
     if (face == 2) EXPECT_EQ(sh.colors[v].r, 10.0f);
     else if (p.x == 1.0) EXPECT_EQ(sh.colors[v].r, 2.0f);  // the shared edge

@@ -52,7 +52,7 @@ TEST(View, StateJsonHasLogCsvsNumbersAndNullForNaN) {
 
 TEST(View, MeshBlobIsTheDocumentedLayout) {
   ShadedMesh m;
-  m.positions = {{10, 0, 0}, {12, 0, 0}, {12, 2, 0}, {10, 2, 0}, {10, 0, 4}, {12, 0, 4}, {10, 2, 4}};
+  m.own = {{10, 0, 0}, {12, 0, 0}, {12, 2, 0}, {10, 2, 0}, {10, 0, 4}, {12, 0, 4}, {10, 2, 4}};
   m.colors = {{1, 2, 3}, {-1, 0, 0.5f}, {NAN, 1, 1}, {0, 0, 0}, {4, 4, 4}, {5, 5, 5}, {6, 6, 6}};
   m.polys = {{0, 1, 2, 3}, {4, 5, 6, -1}};
   const std::string b = ViewMeshBlob(m, 0.75f);

@@ -19,7 +19,7 @@ ViewInfo Info() {
 
 ShadedMesh Triangle(float c) {
   ShadedMesh m;
-  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.own = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   m.colors = {glm::vec3(c), glm::vec3(c), glm::vec3(c)};
   m.polys = {{0, 1, 2, -1}};
   return m;
