@@ -11,6 +11,7 @@
 # varints, normal, area and its own vertices), marked "(v3)".
 #   bash bench/startup.sh [N...]            (default 2000 20000; J: JOBS)
 #   JOBS="2 4 8" BEFORE=/tmp/before2/radiosity bash bench/startup.sh 20000
+# OPTS adds options to every run (e.g. OPTS=--no-groups).
 cd "$(dirname "$0")/.." || exit 1
 RAD=${RADIOSITY:-$PWD/radiosity}
 GEN=${SCENEGEN:-$PWD/build/scenegen}
@@ -53,7 +54,7 @@ for n in "$@"; do
     END { printf "%d", 8 + 82 + vl(m + 1) + 48 * (m + 1) + vl(i) + b }' "$T/b.obj")
   for j in $JOBS; do
     for bin in ${BEFORE:+"$BEFORE"} "$RAD"; do
-      read -r load mesh frame first col all < <(watch "$j" "$bin" -v --log-every 1 -j "$j" \
+      read -r load mesh frame first col all < <(watch "$j" "$bin" -v --log-every 1 -j "$j" $OPTS \
         --size 16x16 -o "$T/o" "$T/b.obj")
       [ "$frame" = - ] && frame="$v3 (v3)"
       awk -v b="$bin" -v f="$faces" -v l="$load" -v m="$mesh" -v fr="$frame" -v j="$j" \
