@@ -57,7 +57,7 @@ std::string SelfExe();
 struct PoolOptions {
   double heartbeat_s = 1.0;  // send a heartbeat after this much silence
   double timeout_s = 10.0;   // drop a worker silent, or given work and no column, this long
-  double hello_s = 30.0;     // deadline for hello + mesh build
+  double hello_s = 30.0;     // deadline for the worker's hello (then: heartbeats)
 };
 
 class WorkerPool;

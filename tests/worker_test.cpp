@@ -53,7 +53,9 @@ class WorkerTest : public ::testing::Test {
     proto::EncodeScene(setup_, &f);
     master_->Send(f);
     std::string payload, err;
-    ASSERT_EQ(Next(&payload), Msg::kReady);
+    Msg type = Next(&payload);
+    while (type == Msg::kHeartbeat) type = Next(&payload);  // while it builds the mesh
+    ASSERT_EQ(type, Msg::kReady);
     proto::Ready r;
     ASSERT_TRUE(proto::DecodeReady(payload, &r, &err)) << err;
     const Mesh m = MakeMesh(setup_.scene);
@@ -63,7 +65,9 @@ class WorkerTest : public ::testing::Test {
   // The error frame the worker sent, and its return.
   std::string Error() {
     std::string payload, text, err;
-    EXPECT_EQ(Next(&payload), Msg::kError);
+    Msg type = Next(&payload);
+    while (type == Msg::kHeartbeat) type = Next(&payload);
+    EXPECT_EQ(type, Msg::kError);
     EXPECT_TRUE(proto::DecodeError(payload, &text, &err)) << err;
     End();
     EXPECT_EQ(status_, 1);
