@@ -174,13 +174,7 @@ namespace {
 // 4): bounding box, materials, then every face with its own vertices,
 // normal and area. SceneHash is defined on these bytes, so they stay.
 void PutSceneV1(const Scene& scene, std::string* out) {
-  PutVec(out, scene.lo);
-  PutVec(out, scene.hi);
-  PutVarint(out, scene.materials.size());
-  for (const Material& mt : scene.materials) {
-    PutVec(out, mt.kd);
-    PutVec(out, mt.ke);
-  }
+  proto::PutBoxAndMaterials(scene, out);
   PutVarint(out, scene.faces.size());
   for (const Face& f : scene.faces) {
     PutVarint(out, uint32_t(f.material));

@@ -236,9 +236,7 @@ void EncodeHello(const Hello& m, std::string* out) {
   EndFrame(start, out);
 }
 
-// The scene part of the scene frame: bounding box, materials, the vertex
-// table in order of first use, faces as material, index and corners.
-void PutGeometry(const Scene& scene, std::string* out) {
+void PutBoxAndMaterials(const Scene& scene, std::string* out) {
   PutVec(out, scene.lo);
   PutVec(out, scene.hi);
   PutVarint(out, scene.materials.size());
@@ -246,6 +244,12 @@ void PutGeometry(const Scene& scene, std::string* out) {
     PutVec(out, mt.kd);
     PutVec(out, mt.ke);
   }
+}
+
+// The scene part of the scene frame: bounding box, materials, the vertex
+// table in order of first use, faces as material, index and corners.
+void PutGeometry(const Scene& scene, std::string* out) {
+  PutBoxAndMaterials(scene, out);
   size_t corners = 0;
   for (const Face& f : scene.faces) corners += f.verts.size();
   VertexTable table(corners / 2);

@@ -89,6 +89,9 @@ void EndFrame(size_t start, std::string* out);
 // Appends a whole frame (header and payload) to *out.
 void EncodeHello(const Hello& m, std::string* out);
 void EncodeScene(const SceneSetup& m, std::string* out);
+// The scene frame's bounding box and materials, laid out alike since
+// version 1; checkpoints hash them (SceneHash) with version 1's faces.
+void PutBoxAndMaterials(const Scene& scene, std::string* out);
 void EncodeReady(const Ready& m, std::string* out);
 void EncodeWork(const std::vector<Assignment>& m, std::string* out);
 // The column's form factors as ffcodec.h codes them.

@@ -4,7 +4,8 @@
 # seconds the master prints with -v, the bytes of the scene frame each
 # worker is sent, and, from the start of the master, when the first worker
 # joined, when the first column was shot and when all J had joined. The
-# master is killed once all have joined (what follows is not start-up).
+# master is killed once all have joined (what follows is not start-up),
+# or after 15 minutes ("-" for what had not happened by then).
 # BEFORE, if set, is another binary run side by side (same scene, back to
 # back: the machine is noisy). Its frame is not printed by it: the bytes
 # are those of protocol 3's layout, counted from the OBJ (a face: three
@@ -29,6 +30,8 @@ watch() {
     pipe(my $r, my $w) or die; my $pid = fork;
     if (!$pid) { open(STDERR, ">&", $w); open(STDOUT, ">/dev/null"); close $r; exec @cmd; exit 127 }
     close $w;
+    $SIG{ALRM} = sub { kill "KILL", $pid };  # given up: "-" for what did not come
+    alarm 900;
     my ($load, $mesh, $frame, $first, $col, $all, $n) = ("-", "-", "-", "-", "-", "-", 0);
     while (my $l = <$r>) {
       my $t = sprintf "%.2f", time - $t0;
