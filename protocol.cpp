@@ -74,18 +74,20 @@ size_t Utf8Len(const std::string& s, size_t i) {
 
 bool Control(char c) { return uint8_t(c) < 0x20 || uint8_t(c) == 0x7f; }
 
-// The scene frame's vertex table: each point once, by its bits (so -0.0
-// and 0.0 stay apart and every vertex comes back bit for bit), numbered
-// in the order of first use. Open addressing, at most half full; a slot
-// holds the top half of the point's hash beside its number, so that a
-// probe compares points only when the hashes agree (at 10^6 faces the
-// table is far larger than the caches: one miss per look-up, not two).
+// A point's hash, of its bits.
 uint64_t PointHash(const glm::dvec3& p) {
   uint64_t b[3];
   std::memcpy(b, &p, sizeof b);
   return SplitMix64(b[0] ^ SplitMix64(b[1] ^ SplitMix64(b[2])));
 }
 
+// The scene frame's vertex table as the encoder makes it: each point once,
+// by its bits (so -0.0 and 0.0 stay apart and every vertex comes back bit
+// for bit), numbered in the order of first use. Open addressing, at most
+// half full; a slot holds the top half of the point's hash beside its
+// number, so that a probe compares points only when the hashes agree (at
+// 10^6 faces the table is far larger than the caches: one miss per
+// look-up, not two).
 class VertexTable {
  public:
   explicit VertexTable(size_t expect) {
