@@ -110,6 +110,24 @@ TEST_F(WorkerTest, ComputesColumnsInOrderAndLeavesOnBye) {
   EXPECT_EQ(status_, 0) << err_;
 }
 
+// A large scene takes long to arrive and to mesh: the worker says that it
+// lives meanwhile (doc/protocol.txt, the conversation).
+TEST_F(WorkerTest, HeartbeatsWhileTheSceneArrives) {
+  ASSERT_EQ(Next(), Msg::kHello);
+  std::string hello, scene;
+  proto::EncodeHello(proto::Hello(), &hello);
+  proto::EncodeScene(setup_, &scene);
+  master_->Send(hello + scene.substr(0, scene.size() / 2));
+  EXPECT_EQ(Next(), Msg::kHeartbeat);  // within 0.25 s of silence
+  master_->Send(scene.substr(scene.size() / 2));
+  Msg type = Next();
+  while (type == Msg::kHeartbeat) type = Next();
+  EXPECT_EQ(type, Msg::kReady);
+  master_->Close();
+  End();
+  EXPECT_EQ(status_, 0) << err_;
+}
+
 TEST_F(WorkerTest, EndOfStreamBeforeTheSceneIsAQuietExit) {
   ASSERT_EQ(Next(), Msg::kHello);
   master_->Close();
