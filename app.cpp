@@ -289,8 +289,13 @@ void MasterRun::StartWorkers() {
   // at 10^6 faces), and comes back for the results.
   proto::SceneSetup setup{std::move(scene_), opts_.mesh, run_.resolution, run_.rotate, run_.seed,
                           opts_.pool.heartbeat_s};
+  const double t0 = MonotonicSeconds();
   auto pool = std::make_unique<WorkerPool>(setup, mesh_, opts_.pool);
   scene_ = std::move(setup.scene);
+  if (opts_.verbosity >= 2)
+    std::fprintf(stderr, "radiosity: scene frame of %zu bytes (%.1f a face), encoded in %.2f s\n",
+                 pool->SetupBytes(), double(pool->SetupBytes()) / double(std::max<size_t>(1, scene_.faces.size())),
+                 MonotonicSeconds() - t0);
   if (pool->SceneTooLarge())
     Die(kExitUsage, opts_.scene_path + ": too large to send to workers (protocol limit " +
                         std::to_string(proto::kMaxFrame >> 20) + " MiB); use -j 0");

@@ -168,6 +168,26 @@ std::string Implausible(const Checkpoint& k) {
 
 }  // namespace
 
+namespace {
+
+// The scene as protocol 1 to 3 sent it (doc/protocol.txt before version
+// 4): bounding box, materials, then every face with its own vertices,
+// normal and area. SceneHash is defined on these bytes, so they stay.
+void PutSceneV1(const Scene& scene, std::string* out) {
+  proto::PutBoxAndMaterials(scene, out);
+  PutVarint(out, scene.faces.size());
+  for (const Face& f : scene.faces) {
+    PutVarint(out, uint32_t(f.material));
+    PutVarint(out, uint32_t(f.index));
+    PutVarint(out, f.verts.size());
+    PutVec(out, f.normal);
+    PutF64(out, f.area);
+    for (const auto& v : f.verts) PutVec(out, v);
+  }
+}
+
+}  // namespace
+
 std::string SceneHash(const Scene& scene) {
   // Format 1 defines it as the SHA-256 of protocol 1's scene frame for the
   // default options: only the scene varies (the options are compared on
@@ -179,7 +199,7 @@ std::string SceneHash(const Scene& scene) {
   PutFixed32(&frame, 1);   // seed
   PutVarint(&frame, 2);    // elements per patch
   PutF64(&frame, 0);       // patch size
-  proto::PutScene(scene, &frame);
+  PutSceneV1(scene, &frame);
   proto::EndFrame(start, &frame);
   return Sha256Of(frame);
 }

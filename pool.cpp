@@ -215,7 +215,9 @@ bool WorkerPool::Handle(int w, proto::Msg type, const std::string& payload,
     *why = proto::DecodeError(payload, &text, &err) ? "says: " + text : "garbled error: " + err;
     return false;
   }
-  if (type == Msg::kHeartbeat && wk.state == State::kJoined) {
+  // Heartbeats come from the worker's hello on: while it receives the
+  // scene and builds its mesh, and while it computes.
+  if (type == Msg::kHeartbeat && (wk.state == State::kReady || wk.state == State::kJoined)) {
     if (payload.empty()) return true;
     *why = "garbled heartbeat";
     return false;
@@ -310,7 +312,7 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
   for (size_t w = 0; w < workers_.size(); ++w) {
     Worker& wk = workers_[w];
     if (wk.state == State::kLost) continue;
-    if (wk.state != State::kJoined && now - wk.started > opts_.hello_s) {
+    if (wk.state == State::kHello && now - wk.started > opts_.hello_s) {
       Lose(int(w), "did not start within " + std::to_string(int(opts_.hello_s)) + " s", events);
     } else if (wk.state == State::kJoined && wk.out.empty() &&
                now - wk.last_sent > opts_.heartbeat_s) {
@@ -357,7 +359,10 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
   now = Clk();
   for (size_t w = 0; w < workers_.size(); ++w) {
     const Worker& wk = workers_[w];
-    if (wk.state == State::kJoined && now - wk.last_heard > opts_.timeout_s) {
+    // After its hello a worker may take as long as the scene takes to
+    // arrive and mesh, as long as it says that it lives.
+    if ((wk.state == State::kReady || wk.state == State::kJoined) &&
+        now - wk.last_heard > opts_.timeout_s) {
       char buf[80];
       std::snprintf(buf, sizeof buf, "silent for %.1f s", now - wk.last_heard);
       Lose(int(w), buf, events);

@@ -57,7 +57,7 @@ std::string SelfExe();
 struct PoolOptions {
   double heartbeat_s = 1.0;  // send a heartbeat after this much silence
   double timeout_s = 10.0;   // drop a worker silent, or given work and no column, this long
-  double hello_s = 30.0;     // deadline for hello + mesh build
+  double hello_s = 30.0;     // deadline for the worker's hello (then: heartbeats)
 };
 
 class WorkerPool;
@@ -93,6 +93,8 @@ class WorkerPool : public Transport {
   // The scene frame is larger than the protocol allows (a scene of some
   // millions of faces): workers cannot take it.
   bool SceneTooLarge() const { return scene_frame_.size() > proto::kMaxFrame; }
+  // Bytes every worker is sent before its first work: hello and scene.
+  size_t SetupBytes() const { return scene_frame_.size(); }
   // Takes a new worker; the hello and the scene are sent at once.
   void Add(std::unique_ptr<Conn> conn, const std::string& name);
   // Polls `source` along with the workers from now on.

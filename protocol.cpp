@@ -8,12 +8,15 @@
 // payload must be used up exactly.
 #include "protocol.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 #include "check.h"
 #include "coding.h"
 #include "ffcodec.h"
+#include "hash.h"
 
 namespace proto {
 namespace {
@@ -71,6 +74,69 @@ size_t Utf8Len(const std::string& s, size_t i) {
 
 bool Control(char c) { return uint8_t(c) < 0x20 || uint8_t(c) == 0x7f; }
 
+// A point's hash, of its bits.
+uint64_t PointHash(const glm::dvec3& p) {
+  uint64_t b[3];
+  std::memcpy(b, &p, sizeof b);
+  return SplitMix64(b[0] ^ SplitMix64(b[1] ^ SplitMix64(b[2])));
+}
+
+// The scene frame's vertex table as the encoder makes it: each point once,
+// by its bits (so -0.0 and 0.0 stay apart and every vertex comes back bit
+// for bit), numbered in the order of first use. Open addressing, at most
+// half full; a slot holds the top half of the point's hash beside its
+// number, so that a probe compares points only when the hashes agree (at
+// 10^6 faces the table is far larger than the caches: one miss per
+// look-up, not two).
+class VertexTable {
+ public:
+  explicit VertexTable(size_t expect) {
+    points_.reserve(expect);
+    Resize(expect);
+  }
+  // p's number; a new point is added at the end (*added true).
+  uint32_t Insert(const glm::dvec3& p, bool* added) {
+    if (2 * (points_.size() + 1) > slots_.size()) Resize(slots_.size());
+    const uint64_t h = PointHash(p), tag = h & ~uint64_t(0xffffffff);
+    for (size_t i = h & (slots_.size() - 1);; i = (i + 1) & (slots_.size() - 1)) {
+      const uint64_t slot = slots_[i];
+      if (slot == kEmpty) {
+        slots_[i] = tag | points_.size();
+        points_.push_back(p);
+        *added = true;
+        return uint32_t(points_.size() - 1);
+      }
+      if ((slot & ~uint64_t(0xffffffff)) == tag &&
+          std::memcmp(&points_[uint32_t(slot)], &p, sizeof p) == 0) {
+        *added = false;
+        return uint32_t(slot);
+      }
+    }
+  }
+  const std::vector<glm::dvec3>& points() const { return points_; }
+
+ private:
+  static constexpr uint64_t kEmpty = UINT64_MAX;  // no point has number 2^32-1
+  void Resize(size_t want) {
+    size_t n = 16;
+    while (n < 2 * want) n *= 2;
+    slots_.assign(n, kEmpty);
+    for (size_t k = 0; k < points_.size(); ++k) {
+      const uint64_t h = PointHash(points_[k]);
+      size_t i = h & (n - 1);
+      while (slots_[i] != kEmpty) i = (i + 1) & (n - 1);
+      slots_[i] = (h & ~uint64_t(0xffffffff)) | k;
+    }
+  }
+  std::vector<glm::dvec3> points_;
+  std::vector<uint64_t> slots_;
+};
+
+// A face's index as the difference from the one before, less 1 (0 for
+// consecutive faces), zigzag-coded: 0, -1, 1, -2 ... as 0, 1, 2, 3 ...
+uint64_t ZigZag(int64_t v) { return v < 0 ? (uint64_t(-(v + 1)) << 1) | 1 : uint64_t(v) << 1; }
+int64_t UnZigZag(uint64_t z) { return z & 1 ? -int64_t(z >> 1) - 1 : int64_t(z >> 1); }
+
 // The checks DecodeScene makes on values; EncodeScene CHECKs them too.
 bool ValidSetup(const SceneSetup& m, std::string* err) {
   auto fail = [&](const std::string& what) {
@@ -119,10 +185,10 @@ bool ValidSetup(const SceneSetup& m, std::string* err) {
     for (const auto& v : f.verts)
       if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
         return fail(at + "a vertex is not finite");
+    if (!(f.area > 0) || !std::isfinite(f.area)) return fail(at + "area is not finite and > 0");
     const double len = glm::length(f.normal);
     if (!std::isfinite(len) || !(std::fabs(len - 1) <= 1e-6))
       return fail(at + "normal is not of unit length");
-    if (!(f.area > 0) || !std::isfinite(f.area)) return fail(at + "area is not finite and > 0");
   }
   return true;
 }
@@ -172,7 +238,7 @@ void EncodeHello(const Hello& m, std::string* out) {
   EndFrame(start, out);
 }
 
-void PutScene(const Scene& scene, std::string* out) {
+void PutBoxAndMaterials(const Scene& scene, std::string* out) {
   PutVec(out, scene.lo);
   PutVec(out, scene.hi);
   PutVarint(out, scene.materials.size());
@@ -180,14 +246,37 @@ void PutScene(const Scene& scene, std::string* out) {
     PutVec(out, mt.kd);
     PutVec(out, mt.ke);
   }
+}
+
+// The scene part of the scene frame: bounding box, materials, the vertex
+// table in order of first use, faces as material, index and corners.
+void PutGeometry(const Scene& scene, std::string* out) {
+  PutBoxAndMaterials(scene, out);
+  size_t corners = 0;
+  for (const Face& f : scene.faces) corners += f.verts.size();
+  VertexTable table(corners / 2);
+  std::vector<uint32_t> ids;
+  ids.reserve(corners);
+  bool added;
+  for (const Face& f : scene.faces)
+    for (const glm::dvec3& v : f.verts) ids.push_back(table.Insert(v, &added));
+  out->reserve(out->size() + 24 * table.points().size() + 3 * scene.faces.size() + 2 * corners);
+  PutVarint(out, table.points().size());
+  for (const glm::dvec3& v : table.points()) PutVec(out, v);
   PutVarint(out, scene.faces.size());
+  int64_t previous = -1;
+  uint32_t fresh = 0;  // vertices used so far: the next new one's number
+  const uint32_t* id = ids.data();
   for (const Face& f : scene.faces) {
     PutVarint(out, uint32_t(f.material));
-    PutVarint(out, uint32_t(f.index));
+    PutVarint(out, ZigZag(int64_t(f.index) - previous - 1));
+    previous = f.index;
     PutVarint(out, f.verts.size());
-    PutVec(out, f.normal);
-    PutF64(out, f.area);
-    for (const auto& v : f.verts) PutVec(out, v);
+    for (size_t k = 0; k < f.verts.size(); ++k, ++id) {
+      // 0: the next vertex of the table; b: the one b places before it.
+      PutVarint(out, *id == fresh ? 0 : fresh - *id);
+      if (*id == fresh) ++fresh;
+    }
   }
 }
 
@@ -196,6 +285,15 @@ void EncodeScene(const SceneSetup& m, std::string* out) {
   if (!ValidSetup(m, &err)) {
     std::fprintf(stderr, "radiosity: internal error: EncodeScene: %s\n", err.c_str());
     CHECK(!"a valid scene setup");
+  }
+  // Normals and areas are not sent: the worker's FacePlane must find what
+  // the master's faces hold, or it builds another mesh.
+  Face g;
+  for (const Face& f : m.scene.faces) {
+    g.verts.assign(f.verts.begin(), f.verts.end());
+    FacePlane(&g);
+    CHECK(std::memcmp(&g.normal, &f.normal, sizeof g.normal) == 0 &&
+          std::memcmp(&g.area, &f.area, sizeof g.area) == 0);
   }
   // A scene past kMaxFrame is still encoded (with its true length, below
   // 4 GiB): the receiver refuses it as too long. Callers that want a
@@ -210,7 +308,7 @@ void EncodeScene(const SceneSetup& m, std::string* out) {
   PutU8(out, m.mesh.groups);
   PutF64(out, m.mesh.group_size);
   PutF64(out, m.heartbeat_s);
-  PutScene(m.scene, out);
+  PutGeometry(m.scene, out);
   EndFrame(start, out);
 }
 
@@ -345,26 +443,66 @@ bool DecodeScene(const std::string& payload, SceneSetup* m, std::string* err) {
   for (Material& mt : s.scene.materials)
     if (!r.FiniteVec(&mt.kd, "material Kd") || !r.FiniteVec(&mt.ke, "material Ke")) return false;
 
-  // A face is at least 3 one-byte varints, normal, area and 3 vertices.
-  constexpr size_t kMinFace = 3 + 4 * 8 + 3 * 24;
+  // Each count is held to the bytes left and to the loader's own limits
+  // (scene.h) before anything is allocated.
+  uint64_t nv;
+  if (!r.Count(24, &nv, "vertex count")) return false;
+  if (nv > uint64_t(kMaxVertices))
+    return r.Fail(std::to_string(nv) + " vertices (the limit is " + std::to_string(kMaxVertices) + ")");
+  std::vector<glm::dvec3> points(static_cast<size_t>(nv));
+  for (glm::dvec3& p : points)
+    if (!r.FiniteVec(&p, "vertex")) return false;
+  {
+    // No point twice: sorted by hash, only neighbours of one hash are
+    // compared (a hash table would miss the caches at every point).
+    std::vector<std::pair<uint64_t, uint32_t>> keys(points.size());
+    for (size_t i = 0; i < points.size(); ++i) keys[i] = {PointHash(points[i]), uint32_t(i)};
+    std::sort(keys.begin(), keys.end());
+    for (size_t i = 1; i < keys.size(); ++i)
+      for (size_t j = i; j-- > 0 && keys[j].first == keys[i].first;)
+        if (std::memcmp(&points[keys[j].second], &points[keys[i].second], sizeof(glm::dvec3)) == 0)
+          return r.Fail("vertex " + std::to_string(keys[i].second) + " repeats vertex " +
+                        std::to_string(keys[j].second));
+  }
+  // A face is at least 3 one-byte varints and 3 one-byte corners.
+  constexpr size_t kMinFace = 6;
   uint64_t nf;
   if (!r.Count(kMinFace, &nf, "face count")) return false;
+  if (nf > uint64_t(kMaxFaces))
+    return r.Fail(std::to_string(nf) + " faces (the limit is " + std::to_string(kMaxFaces) + ")");
   s.scene.faces.resize(size_t(nf));
+  int64_t previous = -1;
+  uint64_t fresh = 0, corners = 0;
   for (size_t i = 0; i < s.scene.faces.size(); ++i) {
     Face& f = s.scene.faces[i];
+    auto at = [i] { return "face " + std::to_string(i) + ": "; };
     if (!r.Varint(nm - 1, &v, "face material")) return false;
     f.material = int(v);
-    if (!r.Varint(INT32_MAX, &v, "face index")) return false;
-    f.index = int(v);
-    uint64_t nv;
-    if (!r.Count(24, &nv, "face vertex count")) return false;
-    if (nv < 3) return r.Fail("face " + std::to_string(i) + " has " + std::to_string(nv) +
-                              " vertices (at least 3)");
-    if (!r.FiniteVec(&f.normal, "face normal") || !r.Finite(&f.area, "face area")) return false;
-    f.verts.resize(size_t(nv));
-    for (auto& p : f.verts)
-      if (!r.FiniteVec(&p, "vertex")) return false;
+    if (!r.Varint(UINT32_MAX, &v, "face index")) return false;
+    const int64_t index = previous + 1 + UnZigZag(v);
+    if (index < 0 || index > INT32_MAX)
+      return r.Fail(at() + "index " + std::to_string(index) + " is not in 0..2^31-1");
+    f.index = int(index);
+    previous = index;
+    uint64_t n;
+    if (!r.Count(1, &n, "face vertex count")) return false;
+    if (n < 3 || n > kMaxPolygon)
+      return r.Fail(at() + std::to_string(n) + " vertices (3.." + std::to_string(kMaxPolygon) + ")");
+    corners += n;
+    if (corners > uint64_t(kMaxCorners))
+      return r.Fail(at() + "more than " + std::to_string(kMaxCorners) + " face vertices in all");
+    f.verts.resize(size_t(n));
+    for (glm::dvec3& p : f.verts) {
+      uint64_t back;
+      if (!r.Varint(fresh, &back, "face vertex")) return false;
+      if (back == 0 && fresh == nv)
+        return r.Fail(at() + "uses more vertices than the table's " + std::to_string(nv));
+      p = points[size_t(back == 0 ? fresh++ : fresh - back)];
+    }
+    FacePlane(&f);
   }
+  if (fresh != nv)
+    return r.Fail(std::to_string(nv - fresh) + " vertices of the table are used by no face");
   if (!r.End("scene")) return false;
   if (!ValidSetup(s, err)) return false;
   *m = std::move(s);

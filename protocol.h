@@ -48,8 +48,10 @@ struct Hello {
 // What a worker needs to build the master's mesh bit for bit and to
 // compute columns like the master would.
 struct SceneSetup {
-  Scene scene;          // faces (verts, normal, area, material, index),
-                        // materials (kd, ke), lo, hi; names are not sent
+  Scene scene;          // faces (verts, material, index), materials (kd,
+                        // ke), lo, hi; names are not sent. Each face's
+                        // normal and area must be FacePlane's (LoadScene
+                        // gives them so): the worker computes them again.
   MeshOptions mesh;
   int32_t resolution = 256;
   uint8_t rotate = 1;
@@ -87,10 +89,9 @@ void EndFrame(size_t start, std::string* out);
 // Appends a whole frame (header and payload) to *out.
 void EncodeHello(const Hello& m, std::string* out);
 void EncodeScene(const SceneSetup& m, std::string* out);
-// The scene part of the scene frame, its last field: bounding box,
-// materials, faces. Checkpoints hash it too (SceneHash): a change here
-// needs a new checkpoint format version.
-void PutScene(const Scene& scene, std::string* out);
+// The scene frame's bounding box and materials, laid out alike since
+// version 1; checkpoints hash them (SceneHash) with version 1's faces.
+void PutBoxAndMaterials(const Scene& scene, std::string* out);
 void EncodeReady(const Ready& m, std::string* out);
 void EncodeWork(const std::vector<Assignment>& m, std::string* out);
 // The column's form factors as ffcodec.h codes them.

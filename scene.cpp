@@ -24,17 +24,6 @@
 
 namespace {
 
-// Far beyond any scene this program can solve, but small enough that the
-// limit is reported instead of ending in bad_alloc.
-// Every face becomes at least one element, so more faces than the mesh's
-// element cap (kMaxElements, mesh.h) could never run: refused while
-// reading, before the faces alone fill the memory (about 150 bytes each).
-constexpr long kMaxVertices = 32000000;
-constexpr long kMaxFaces = 8000000;
-constexpr long kMaxCorners = 64000000;
-// A polygon's vertices: the mesh cuts a face along its outline, so one
-// polygon of 10,000 vertices would become over a million elements.
-constexpr size_t kMaxPolygon = 1000;
 constexpr double kMaxKe = 1e30;
 constexpr size_t kMaxLine = size_t{256} << 20;
 
@@ -434,12 +423,10 @@ bool Loader::FaceLine(const std::string& path, long ln, const std::vector<std::s
   centroid /= static_cast<double>(face.verts.size());
   const double extent = glm::length(hi - lo);
   const double magnitude = glm::length(glm::max(glm::abs(lo), glm::abs(hi)));
-  const glm::dvec3 newell = AreaVector(face.verts);
-  face.area = glm::length(newell);
+  FacePlane(&face);
   if (!std::isfinite(face.area) || !std::isfinite(extent * extent))
     return Fail(path, ln, "f: face too large: its area is not a finite number");
   if (!(face.area > kZeroArea * extent * extent)) return SkipFace(path, ln, "");
-  face.normal = newell / glm::length(newell);
   double off = 0.0;
   for (const glm::dvec3& v : face.verts) {
     off = std::max(off, std::abs(glm::dot(v - centroid, face.normal)));
@@ -593,6 +580,15 @@ glm::dvec3 AreaVector(const std::vector<glm::dvec3>& poly) {
   for (size_t i = 0; i < poly.size(); ++i)
     n += glm::cross(poly[i] - centroid, poly[(i + 1) % poly.size()] - centroid);
   return 0.5 * n;
+}
+
+// Not inlined, so that LoadScene and the worker's DecodeScene run the very
+// same instructions (no contraction or reordering that differs by call
+// site): the two must agree bit for bit (doc/protocol.txt, scene).
+__attribute__((noinline)) void FacePlane(Face* face) {
+  const glm::dvec3 n = AreaVector(face->verts);
+  face->area = glm::length(n);
+  face->normal = face->area > 0 ? n / face->area : glm::dvec3(0.0);
 }
 
 void DropVertices(Scene* scene) {

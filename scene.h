@@ -9,6 +9,19 @@
 
 #include <glm/glm.hpp>
 
+// Far beyond any scene this program can solve, but small enough that the
+// limit is reported instead of ending in bad_alloc.
+// Every face becomes at least one element, so more faces than the mesh's
+// element cap (kMaxElements, mesh.h) could never run: refused while
+// reading, before the faces alone fill the memory (about 150 bytes each).
+// The scene frame (protocol.h) is held to the same limits.
+constexpr long kMaxVertices = 32000000;
+constexpr long kMaxFaces = 8000000;
+constexpr long kMaxCorners = 64000000;
+// A polygon's vertices: the mesh cuts a face along its outline, so one
+// polygon of 10,000 vertices would become over a million elements.
+constexpr size_t kMaxPolygon = 1000;
+
 struct Material {
   std::string name;
   glm::dvec3 kd{0.5};  // diffuse reflectance, each channel in [0,1]
@@ -57,6 +70,11 @@ void DropVertices(Scene* scene);
 
 // A polygon's normal scaled to its area (Newell's method).
 glm::dvec3 AreaVector(const std::vector<glm::dvec3>& poly);
+// Sets face->area and face->normal from face->verts (AreaVector, its
+// length, the vector over its length), as LoadScene does for every face.
+// The scene frame leaves both out: the worker computes them with this
+// same function, bit for bit (the hello checks that it is the same build).
+void FacePlane(Face* face);
 
 // Parses "ex ey ez tx ty tz fov" (the --camera option and the OBJ comment).
 bool ParseCamera(const std::string& text, Camera* cam, std::string* err);

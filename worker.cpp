@@ -8,6 +8,7 @@
 #include <condition_variable>
 #include <cstring>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <thread>
 
@@ -117,11 +118,15 @@ class Worker {
   // The master sends heartbeats when idle; this much silence means it is
   // gone without closing the stream (a host that vanished).
   static constexpr double kMasterTimeout = 60.0;
+  // The heartbeat period from the master's hello to the ready
+  // (doc/protocol.txt): below the master's least --timeout, 0.5 s.
+  static constexpr double kSetupHeartbeat = 0.25;
 };
 
 Worker::Got Worker::Read(double timeout, proto::Msg* type, std::string* payload,
                          std::string* err) {
-  const double until = MonotonicSeconds() + timeout;
+  // `timeout` is of silence: a large scene may take longer to arrive.
+  double until = MonotonicSeconds() + timeout;
   for (;;) {
     switch (in_.Next(type, payload, err)) {
       case proto::FrameReader::kFrame: return kFrame;
@@ -139,6 +144,7 @@ Worker::Got Worker::Read(double timeout, proto::Msg* type, std::string* payload,
     if (got < 0 && errno == EINTR) continue;
     if (got <= 0) return kEnd;
     in_.Append(buf, size_t(got));
+    until = MonotonicSeconds() + timeout;
   }
 }
 
@@ -203,6 +209,10 @@ int Worker::Run(std::string* err) {
   if (hello.magic != proto::kMagic || hello.version != proto::kVersion ||
       hello.build != proto::BuildId())
     return Fail("this worker is '" + proto::BuildId() + "', the master '" + hello.build + "'", err);
+  // Receiving and meshing a scene of 10^6 faces takes seconds to minutes:
+  // heartbeats say meanwhile that this worker lives (the scene's own period
+  // is not known before it is in).
+  auto setup_heartbeat = std::make_unique<Heartbeat>(&out_, kSetupHeartbeat);
   got = Read(kMasterTimeout, &type, &payload, &why);
   if (got == kEnd) return kExitOk;
   if (got != kFrame) return Fail(got == kTimeout ? "no scene from the master" : why, err);
@@ -224,6 +234,7 @@ int Worker::Run(std::string* err) {
   malloc_trim(0);
   frame.clear();
   proto::EncodeReady({mesh_.elems.size(), MeshHash(mesh_)}, &frame);
+  setup_heartbeat.reset();
   if (!out_.Send(frame)) return kExitOk;
 
   Hemicube hemicube(setup.resolution);

@@ -46,14 +46,33 @@ std::string RawScene(const proto::SceneSetup& m) {
     WVec(&s, mt.kd);
     WVec(&s, mt.ke);
   }
+  // The vertex table: every point once (by its bits), in order of first
+  // use; then each face's corners as 0 (the next vertex of the table) or
+  // how many places before the next one the vertex is.
+  std::vector<glm::dvec3> table;
+  std::vector<size_t> ids;
+  for (const auto& f : m.scene.faces)
+    for (const auto& v : f.verts) {
+      size_t i = 0;
+      while (i < table.size() && std::memcmp(&table[i], &v, sizeof v) != 0) ++i;
+      if (i == table.size()) table.push_back(v);
+      ids.push_back(i);
+    }
+  WVar(&s, table.size());
+  for (const auto& v : table) WVec(&s, v);
   WVar(&s, m.scene.faces.size());
+  long previous = -1;
+  size_t fresh = 0, k = 0;
   for (const auto& f : m.scene.faces) {
     WVar(&s, uint32_t(f.material));
-    WVar(&s, uint32_t(f.index));
+    const long d = f.index - previous - 1;  // zigzag: 0, -1, 1, -2 as 0, 1, 2, 3
+    WVar(&s, d >= 0 ? uint64_t(2 * d) : uint64_t(-2 * d - 1));
+    previous = f.index;
     WVar(&s, f.verts.size());
-    WVec(&s, f.normal);
-    WF64(&s, f.area);
-    for (const auto& v : f.verts) WVec(&s, v);
+    for (size_t c = 0; c < f.verts.size(); ++c, ++k) {
+      WVar(&s, ids[k] == fresh ? 0 : fresh - ids[k]);
+      if (ids[k] == fresh) ++fresh;
+    }
   }
   return s;
 }
@@ -74,7 +93,7 @@ proto::SceneSetup TestSetup() {
                      {0.3, 0.1, 1.1 - u}},
           glm::dvec3(0.25), glm::dvec3(0));  // a pentagon over the floor, facing down
   std::reverse(m.scene.faces.back().verts.begin(), m.scene.faces.back().verts.end());
-  m.scene.faces.back().normal = -m.scene.faces.back().normal;
+  FacePlane(&m.scene.faces.back());
   AddFace(&m.scene, {{t, 1.9, t}, {t, 1.9, 1.0 + u}, {1.0 + t, 1.9, t}}, glm::dvec3(0.9),
           glm::dvec3(0));
   m.scene.faces.back().material = 2;  // materials shared by faces
@@ -157,7 +176,7 @@ TEST(Protocol, HelloRoundTrips) {
     std::string frame;
     proto::EncodeHello(h, &frame);
     const std::string p = PayloadOf(frame, Msg::kHello);
-    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x03\x00", 6));  // magic, version
+    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x04\x00", 6));  // magic, version
     proto::Hello d;
     d.magic = 0;
     d.version = 0;
@@ -168,7 +187,7 @@ TEST(Protocol, HelloRoundTrips) {
     EXPECT_EQ(d.build, b);
   }
   // A build string longer than 256 bytes or not printable is refused.
-  std::string p = "RADW" + std::string("\x03\x00", 2);
+  std::string p = "RADW" + std::string("\x04\x00", 2);
   std::string long_build = p;
   WVar(&long_build, 257);
   long_build += std::string(257, 'x');
@@ -318,10 +337,19 @@ TEST(Protocol, SceneValuesOutOfRangeAreRefused) {
       {"no vertices", [](S* m) { m->scene.faces[2].verts.clear(); }, false},
       {"vertex nan", [](S* m) { m->scene.faces[6].verts[4].y = std::nan(""); }, false},
       {"vertex inf", [](S* m) { m->scene.faces[0].verts[0].x = -HUGE_VAL; }, false},
-      {"normal inf", [](S* m) { m->scene.faces[1].normal.x = HUGE_VAL; }, false},
-      {"normal not unit", [](S* m) { m->scene.faces[1].normal *= 2.0; }, false},
-      {"area 0", [](S* m) { m->scene.faces[1].area = 0; }, false},
-      {"area nan", [](S* m) { m->scene.faces[1].area = std::nan(""); }, false},
+      // Normal and area are not sent: the decoder computes them, and a
+      // face whose vertices make no area is refused.
+      {"collinear", [](S* m) { m->scene.faces[1].verts = {glm::dvec3(0), glm::dvec3(1), glm::dvec3(2)}; }, false},
+      {"a point", [](S* m) { m->scene.faces[1].verts.assign(4, glm::dvec3(0.5)); }, false},
+      {"1000 vertices", [](S* m) {
+         auto& v = m->scene.faces[1].verts;
+         v.resize(1000);
+         for (int i = 0; i < 1000; ++i) v[i] = glm::dvec3(std::cos(i * 2 * M_PI / 1000), std::sin(i * 2 * M_PI / 1000), 3);
+       }, true},
+      {"1001 vertices", [](S* m) { m->scene.faces[1].verts.resize(1001, glm::dvec3(0.5)); }, false},
+      {"index 0 everywhere", [](S* m) { for (Face& f : m->scene.faces) f.index = 0; }, true},
+      {"index decreasing", [](S* m) { m->scene.faces[2].index = 0; }, true},
+      {"index max", [](S* m) { m->scene.faces.back().index = INT32_MAX; }, true},
       {"kd > 1", [](S* m) { m->scene.materials[1].kd.g = std::nextafter(1.0, 2.0); }, false},
       {"kd < 0", [](S* m) { m->scene.materials[1].kd.b = -1e-300; }, false},
       {"kd nan", [](S* m) { m->scene.materials[0].kd.r = std::nan(""); }, false},
@@ -337,6 +365,60 @@ TEST(Protocol, SceneValuesOutOfRangeAreRefused) {
     if (!c.ok) {
       EXPECT_FALSE(err.empty()) << c.what;
     }
+  }
+}
+
+// The vertex table and the corners that refer to it, written by hand: the
+// table must be in order of first use, each point once, every point used.
+TEST(Protocol, SceneVertexTableIsChecked) {
+  proto::SceneSetup none = TestSetup();
+  none.scene.faces.clear();
+  const std::string head = RawScene(none).substr(0, RawScene(none).size() - 2);  // to the table
+  const glm::dvec3 p[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  auto scene = [&](std::vector<glm::dvec3> table, uint64_t index, std::vector<uint64_t> corners) {
+    std::string s = head;
+    WVar(&s, table.size());
+    for (const auto& v : table) WVec(&s, v);
+    WVar(&s, 1);  // one face
+    WVar(&s, 0);  // material 0
+    WVar(&s, index);
+    WVar(&s, corners.size());
+    for (uint64_t c : corners) WVar(&s, c);
+    return s;
+  };
+  struct Case {
+    const char* what;
+    std::string payload;
+    const char* error;  // "" when it decodes
+  };
+  const Case cases[] = {
+      {"a triangle", scene({p[0], p[1], p[2]}, 0, {0, 0, 0}), ""},
+      {"a quad", scene({p[0], p[1], p[3], p[2]}, 6, {0, 0, 0, 0}), ""},
+      {"an earlier vertex again", scene({p[0], p[1], p[2]}, 0, {0, 0, 0, 3}), ""},
+      {"past the table", scene({p[0], p[1], p[2]}, 0, {0, 0, 0, 0}), "more vertices than the table"},
+      {"back past the first", scene({p[0], p[1], p[2]}, 0, {0, 0, 3}), "face vertex"},
+      {"a vertex unused", scene({p[0], p[1], p[2], p[3]}, 0, {0, 0, 0}), "used by no face"},
+      {"a vertex twice", scene({p[0], p[1], p[2], p[0]}, 0, {0, 0, 0, 0}), "repeats vertex 0"},
+      {"-0.0 is not 0.0", scene({p[0], p[1], p[2], glm::dvec3(-0.0, 0, 0)}, 0, {0, 0, 0, 0}), ""},
+      {"index -1", scene({p[0], p[1], p[2]}, 1, {0, 0, 0}), "index -1"},
+      {"index 2^31-1", scene({p[0], p[1], p[2]}, uint64_t(INT32_MAX) * 2, {0, 0, 0}), ""},
+      {"index 2^31", scene({p[0], p[1], p[2]}, uint64_t(INT32_MAX) * 2 + 2, {0, 0, 0}), "face index"},
+      {"no area", scene({p[0], glm::dvec3(1, 1, 1), glm::dvec3(2, 2, 2)}, 0, {0, 0, 0}), "area"},
+  };
+  for (const Case& c : cases) {
+    proto::SceneSetup d;
+    std::string err;
+    const bool ok = proto::DecodeScene(c.payload, &d, &err);
+    EXPECT_EQ(ok, !*c.error) << c.what << ": " << err;
+    if (*c.error) {
+      EXPECT_NE(err.find(c.error), std::string::npos) << c.what << ": " << err;
+      EXPECT_EQ(err.find('\n'), std::string::npos) << c.what;
+    }
+    if (!ok) continue;
+    // What decodes encodes to the same bytes.
+    std::string again;
+    proto::EncodeScene(d, &again);
+    EXPECT_EQ(Hex(again.substr(proto::kHeaderSize)), Hex(c.payload)) << c.what;
   }
 }
 
@@ -504,10 +586,16 @@ TEST(Protocol, HugeCountsFailFastWithoutAllocating) {
     WVar(&mats, n);
     EXPECT_FALSE(proto::DecodeScene(mats, &d, &err));
     EXPECT_NE(err.find("material count"), std::string::npos) << err;
+    // A vertex table as large.
+    std::string vt = RawScene(s).substr(0, RawScene(s).size() - 2);  // to the table's count
+    WVar(&vt, n);
+    vt += std::string(30, '\0');
+    EXPECT_FALSE(proto::DecodeScene(vt, &d, &err));
+    EXPECT_NE(err.find("vertex count"), std::string::npos) << err;
     // A face claiming n vertices.
     s = TestSetup();
     s.scene.faces.resize(1);
-    std::string fv = RawScene(s).substr(0, RawScene(s).size() - 32 - 4 * 24);
+    std::string fv = RawScene(s).substr(0, RawScene(s).size() - 4);  // its 4 corners
     fv.resize(fv.size() - 1);  // its vertex count (4, one byte)
     WVar(&fv, n);
     fv += std::string(200, '\0');

@@ -21,9 +21,7 @@ inline void AddFace(Scene* s, std::vector<glm::dvec3> verts, glm::dvec3 kd, glm:
   s->materials.push_back(m);
   Face f;
   f.verts = std::move(verts);
-  glm::dvec3 n = AreaVector(f.verts);
-  f.area = glm::length(n);
-  f.normal = n / f.area;
+  FacePlane(&f);
   f.material = int(s->materials.size()) - 1;
   f.index = int(s->faces.size());
   f.line = f.index + 1;

@@ -53,7 +53,9 @@ class WorkerTest : public ::testing::Test {
     proto::EncodeScene(setup_, &f);
     master_->Send(f);
     std::string payload, err;
-    ASSERT_EQ(Next(&payload), Msg::kReady);
+    Msg type = Next(&payload);
+    while (type == Msg::kHeartbeat) type = Next(&payload);  // while it builds the mesh
+    ASSERT_EQ(type, Msg::kReady);
     proto::Ready r;
     ASSERT_TRUE(proto::DecodeReady(payload, &r, &err)) << err;
     const Mesh m = MakeMesh(setup_.scene);
@@ -63,7 +65,9 @@ class WorkerTest : public ::testing::Test {
   // The error frame the worker sent, and its return.
   std::string Error() {
     std::string payload, text, err;
-    EXPECT_EQ(Next(&payload), Msg::kError);
+    Msg type = Next(&payload);
+    while (type == Msg::kHeartbeat) type = Next(&payload);
+    EXPECT_EQ(type, Msg::kError);
     EXPECT_TRUE(proto::DecodeError(payload, &text, &err)) << err;
     End();
     EXPECT_EQ(status_, 1);
@@ -102,6 +106,24 @@ TEST_F(WorkerTest, ComputesColumnsInOrderAndLeavesOnBye) {
   f.clear();
   proto::EncodeBye(&f);
   master_->Send(f);
+  End();
+  EXPECT_EQ(status_, 0) << err_;
+}
+
+// A large scene takes long to arrive and to mesh: the worker says that it
+// lives meanwhile (doc/protocol.txt, the conversation).
+TEST_F(WorkerTest, HeartbeatsWhileTheSceneArrives) {
+  ASSERT_EQ(Next(), Msg::kHello);
+  std::string hello, scene;
+  proto::EncodeHello(proto::Hello(), &hello);
+  proto::EncodeScene(setup_, &scene);
+  master_->Send(hello + scene.substr(0, scene.size() / 2));
+  EXPECT_EQ(Next(), Msg::kHeartbeat);  // within 0.25 s of silence
+  master_->Send(scene.substr(scene.size() / 2));
+  Msg type = Next();
+  while (type == Msg::kHeartbeat) type = Next();
+  EXPECT_EQ(type, Msg::kReady);
+  master_->Close();
   End();
   EXPECT_EQ(status_, 0) << err_;
 }
