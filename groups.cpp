@@ -147,8 +147,11 @@ class Grouper {
       // Emitters shoot alone: their direct light is most of the answer.
       const glm::dvec3& ke = m_.faces[m_.patches[p].face].emission;
       if (ke.r != 0 || ke.g != 0 || ke.b != 0) continue;
+      // Small patches only: a patch of about the patch size already is the
+      // mesh's unit of where light leaves from, and a group of those would
+      // cast the shadows of one point over several patches' width.
       const double size = glm::length(in.hi - in.lo);
-      if (size > G_) continue;
+      if (size > kSmallPatch * m_.patch_size) continue;
       in.limit = std::min(G_, kGroupReach * Nearest(int(p)));
       in.candidate = size <= in.limit;
     }

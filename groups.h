@@ -11,7 +11,8 @@
 // spans a wall.
 //
 // The rule (man page, MESH), Kok's: a group is small against the distance
-// to what it lights. For a patch p that emits nothing, d(p) is the
+// to what it lights. For a patch p that emits nothing and is at most
+// kSmallPatch patch sizes across (the mesh's own patches shoot alone), d(p) is the
 // distance from its centre to the nearest element it can light (of
 // another patch, in front of p's plane, facing p; bounding boxes, so that
 // d is never too large); p may be in a group at most
@@ -45,6 +46,7 @@
 constexpr double kGroupAngle = 25.0;  // degrees between members' normals, at most
 constexpr double kGroupReach = 1.0;   // a group's width over the distance to its nearest receiver, at most
 constexpr double kGroupPatches = 4.0; // default G, in patch sizes
+constexpr double kSmallPatch = 0.5;   // the widest patch that may group, in patch sizes
 constexpr int kMaxGroup = 64;         // members of a group, at most
 constexpr int kLookAhead = 512;       // candidates looked at past a group's first member
 
