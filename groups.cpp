@@ -122,7 +122,8 @@ class Grouper {
     }
   }
 
-  // Every element by the cells of C_ its bounding box overlaps; then each
+  // Every element by the cells of C_ and of the patch size its bounding box
+  // overlaps; then each
   // patch's limit from the nearest element it can light.
   void IndexElements() {
     elo_.resize(m_.elems.size());
@@ -137,10 +138,12 @@ class Grouper {
       }
       elo_[e] = lo;
       ehi_[e] = hi;
-      const Cell a = CellOf(lo, C_), b = CellOf(hi, C_);
-      for (int64_t x = a.x; x <= b.x; ++x)
-        for (int64_t y = a.y; y <= b.y; ++y)
-          for (int64_t z = a.z; z <= b.z; ++z) grid_[{x, y, z}].push_back(int(e));
+      for (auto [grid, cell] : {std::make_pair(&grid_, C_), std::make_pair(&coarse_, m_.patch_size)}) {
+        const Cell a = CellOf(lo, cell), b = CellOf(hi, cell);
+        for (int64_t x = a.x; x <= b.x; ++x)
+          for (int64_t y = a.y; y <= b.y; ++y)
+            for (int64_t z = a.z; z <= b.z; ++z) (*grid)[{x, y, z}].push_back(int(e));
+      }
     }
     for (size_t p = 0; p < info_.size(); ++p) {
       PatchInfo& in = info_[p];
@@ -160,29 +163,40 @@ class Grouper {
   // The distance from p's centre to the nearest element (bounding box) that
   // p can light: in front of p's plane, facing p, of another patch; G_ /
   // kGroupReach when none is nearer. Found ring by ring of cells about the
-  // centre: after ring r every element nearer than r·C_ has been seen.
+  // centre: after ring r every element nearer than r·cell has been seen.
+  // Near receivers in the fine grid, up to kFineRings rings; farther ones,
+  // when none is near, in the coarse grid (cell: the patch size), so that
+  // a search out to G_ / kGroupReach looks at 9^3 cells, not 65^3.
   double Nearest(int p) {
-    const PatchInfo& in = info_[size_t(p)];
     double best = G_ / kGroupReach;
-    const Cell c0 = CellOf(in.c, C_);
     ++stamp_now_;
-    for (int64_t r = 0; double(r) * C_ < best; ++r)
+    Rings(p, grid_, C_, kFineRings, &best);
+    if (best > kFineRings * C_) Rings(p, coarse_, m_.patch_size, -1, &best);
+    return best;
+  }
+
+  // Rings 0, 1, ... (to `last`; -1: as far as needed) of grid cells about
+  // p's centre, lowering *best to the nearest element p lights.
+  void Rings(int p, const Grid& grid, double cell, int64_t last, double* best) {
+    const PatchInfo& in = info_[size_t(p)];
+    const Cell c0 = CellOf(in.c, cell);
+    // An element at distance δ lies in ring floor(δ / cell) + 1 or nearer.
+    for (int64_t r = 0; double(r - 1) * cell < *best && (last < 0 || r <= last); ++r)
       for (int64_t dx = -r; dx <= r; ++dx)
         for (int64_t dy = -r; dy <= r; ++dy) {
           const bool side = std::abs(dx) == r || std::abs(dy) == r;
           for (int64_t dz = -r; dz <= r; dz += side || r == 0 ? 1 : 2 * r) {
-            auto it = grid_.find({c0.x + dx, c0.y + dy, c0.z + dz});
-            if (it == grid_.end()) continue;
+            auto it = grid.find({c0.x + dx, c0.y + dy, c0.z + dz});
+            if (it == grid.end()) continue;
             for (int e : it->second) {
               if (stamp_[size_t(e)] == stamp_now_) continue;
               stamp_[size_t(e)] = stamp_now_;
               const glm::dvec3 d = glm::max(glm::max(elo_[e] - in.c, in.c - ehi_[e]), 0.0);
               const double dist = glm::length(d);
-              if (dist < best && Lights(p, e)) best = dist;
+              if (dist < *best && Lights(p, e)) *best = dist;
             }
           }
         }
-    return best;
   }
 
   // May light from patch p reach element e: e of another patch, some
@@ -274,6 +288,7 @@ class Grouper {
   double G_, C_, tau_, lift_, eps_;
   std::vector<PatchInfo> info_;
   Grid grid_;                        // elements by the cells of C_ they overlap
+  Grid coarse_;                      // ... and by those of the patch size
   std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes
   std::vector<uint32_t> stamp_;      // per element: last search that looked at it
   uint32_t stamp_now_ = 0;
