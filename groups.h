@@ -7,21 +7,31 @@
 // drains them in one. Each member gives up exactly its own unshot
 // radiosity, so energy stays exact; the approximation is only where the
 // light leaves from (the centroid instead of each member), which is why a
-// group is kept small against the patch size and never spans a wall.
+// group is kept small against the distance to what it lights and never
+// spans a wall.
 //
-// The rule (man page, MESH): a patch may join a group when it emits
-// nothing and its bounding box is at most L across (L =
-// MeshOptions::group_size, default the patch size, at least patch size /
-// 16). Groups are formed inside the cells of a grid of cell L over the
-// patch centres, greedily in patch order; a group's members' bounding box
-// stays at most L across (no wider than a patch, whose light the mesh
-// already sends from one centre), and a patch joins only when, against
-// every member already in: the normals are within kGroupAngle; each lies
-// in front of the other's plane, or behind it by at most L/16 (they
-// neither face each other nor sit back to back, nor one behind the
-// other); and the segment between their centres, lifted by L/32 along
-// each normal, crosses no element of another patch
-// (no wall, no box in between). At most kMaxGroup members.
+// The rule (man page, MESH), Kok's: a group is small against the distance
+// to what it lights. For a patch p that emits nothing and is at most
+// kSmallPatch patch sizes across (the mesh's own patches shoot alone), d(p) is the
+// distance from its centre to the nearest element it can light (of
+// another patch, in front of p's plane, facing p; bounding boxes, so that
+// d is never too large); p may be in a group at most
+// min(G, kGroupReach · d(p)) across (G = MeshOptions::group_size, default
+// kGroupPatches patch sizes, at least patch size / 16), and is a
+// candidate when it is that small itself. So a group shoots from one
+// point only what its receivers see as coming from about one point: in a
+// dense scene (boxes a gap apart) nothing groups, far from everything
+// (small faces high under a ceiling) groups grow to G. Groups are formed
+// inside the cells of a grid of cell G over the patch centres, greedily in
+// patch order, looking at most kLookAhead candidates past each first
+// member; a group's members' bounding box stays within the smallest limit
+// among them, and a patch joins only when, against every member already
+// in: the normals are within kGroupAngle; each lies in front of the
+// other's plane, or behind it by at most patch size / 16 (they neither
+// face each other nor sit back to back, nor one behind the other); and the
+// segment between their centres, lifted by patch size / 32 along each
+// normal, crosses no element of another patch (no wall, no box in
+// between). At most kMaxGroup members.
 //
 // Derived from the mesh as built and the options alone, deterministically:
 // the master and every worker form the same groups (workers get the
@@ -34,7 +44,12 @@
 #include "mesh.h"
 
 constexpr double kGroupAngle = 25.0;  // degrees between members' normals, at most
-constexpr int kMaxGroup = 32;         // members of a group, at most
+constexpr double kGroupReach = 1.0;   // a group's width over the distance to its nearest receiver, at most
+constexpr double kGroupPatches = 4.0; // default G, in patch sizes
+constexpr double kSmallPatch = 0.5;   // the widest patch that may group, in patch sizes
+constexpr int kMaxGroup = 64;         // members of a group, at most
+constexpr int kLookAhead = 512;       // candidates looked at past a group's first member
+constexpr int kFineRings = 3;         // rings of the fine grid (patch size / 8) searched for receivers
 
 // Fills mesh->groups and mesh->group_of for the patches as built (no
 // groups when !opts.groups). Subdivision divides elements, not patches,

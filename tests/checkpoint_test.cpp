@@ -341,11 +341,23 @@ struct ShadowRun {
   Subdivider sub;
 };
 
-// The run of the shadow scene, checkpointed after every shot, and resumed
-// from a checkpoint in each wave and from the last one: the resumed runs
-// end with the uninterrupted run's radiosity, bit for bit, and its log.
-TEST(Checkpoint, ResumedRunEndsExactlyLikeTheWholeRun) {
-  const Scene s = ShadowScene();
+// The shadow scene with 3 x 3 small tiles beside the floor, far from what
+// they light: they shoot as a group (groups.h).
+Scene TiledShadowScene() {
+  Scene s = ShadowScene();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double x = 2.1 + 0.1 * i, y = 0.1 * j;
+      AddFace(&s, {{x, y, 0}, {x + 0.1, y, 0}, {x + 0.1, y + 0.1, 0}, {x, y + 0.1, 0}},
+              glm::dvec3(0.5), glm::dvec3(0));
+    }
+  return s;
+}
+
+// The run of scene s, checkpointed after every shot, and resumed from a
+// checkpoint in each wave and from the last one: the resumed runs end
+// with the uninterrupted run's radiosity, bit for bit, and its log.
+void ResumedRunEndsExactlyLikeTheWholeRun(const Scene& s) {
   const RunIdentity id = Identify(s, MakeMesh(s, ShadowMesh()), Solve(Options(), ShadowMesh()));
   ShadowRun whole(s);
   std::vector<std::string> saved;
@@ -389,6 +401,18 @@ TEST(Checkpoint, ResumedRunEndsExactlyLikeTheWholeRun) {
     ASSERT_LE(rest.size(), log.size());
     EXPECT_TRUE(std::equal(rest.begin(), rest.end(), log.end() - long(rest.size())));
   }
+}
+
+TEST(Checkpoint, ResumedRunEndsExactlyLikeTheWholeRun) {
+  ResumedRunEndsExactlyLikeTheWholeRun(ShadowScene());
+}
+
+TEST(Checkpoint, ResumedRunWithGroupsEndsExactlyLikeTheWholeRun) {
+  const Scene s = TiledShadowScene();
+  const Mesh m = MakeMesh(s, ShadowMesh());
+  ASSERT_EQ(m.groups.size(), 1u);
+  ASSERT_EQ(m.groups[0].members.size(), 9u);
+  ResumedRunEndsExactlyLikeTheWholeRun(s);
 }
 
 }  // namespace

@@ -20,8 +20,9 @@ void Tile(Scene* s, double x, double y, double z, double side, glm::dvec3 kd) {
 
 // The inside of the unit box, its floor cut into n x n tiles (the
 // exporter's facets), the ceiling the light. Patch size 0.5: the tiles are
-// small, the walls cut 2 x 2.
-Scene TiledBox(int n) {
+// small, the walls cut 2 x 2. jitter > 0: each tile raised by up to that
+// (near-coplanar: they do not join, but may group).
+Scene TiledBox(int n, double jitter = 0) {
   Scene s = Box(1.0, {glm::dvec3(0.6), glm::dvec3(0.5), glm::dvec3(0.7), glm::dvec3(0.4),
                       glm::dvec3(0.3), glm::dvec3(0.8, 0.5, 0.2)},
                 {glm::dvec3(0), glm::dvec3(10), glm::dvec3(0), glm::dvec3(0), glm::dvec3(0),
@@ -29,7 +30,8 @@ Scene TiledBox(int n) {
   s.faces.erase(s.faces.begin());  // the floor, cut below instead
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j)
-      Tile(&s, double(i) / n, 0, double(j) / n, 1.0 / n, glm::dvec3(0.5 + 0.02 * ((i + j) % 3)));
+      Tile(&s, double(i) / n, jitter * double((7 * i + 3 * j) % 5) / 4, double(j) / n, 1.0 / n,
+           glm::dvec3(0.5 + 0.02 * ((i + j) % 3)));
   for (size_t f = 0; f < s.faces.size(); ++f) s.faces[f].index = int(f);
   return s;
 }
@@ -46,23 +48,31 @@ bool Grouped(const Mesh& m, int a, int b) {
 
 TEST(Groups, TilesOfOneFloorShootTogether) {
   const Mesh m = MakeMesh(TiledBox(10), Half());
-  // Cells of 0.5 over the floor, 25 tiles in each, and groups no wider than
-  // 0.5 across (3 x 4 tiles of 0.1 at most), formed greedily in tile
-  // order: 12 groups hold all tiles but 4. Nothing else is small.
-  ASSERT_EQ(m.groups.size(), 12u);
+  // What a floor tile lights nearest is a wall (the other tiles are in
+  // its plane, the ceiling is 1 away): a group is no wider than the
+  // distance from any member's centre to the nearest wall, so the ring of
+  // tiles along the walls (0.05 from one, 0.14 across) shoots alone and
+  // the groups grow towards the middle. Nothing else is small enough.
+  auto to_wall = [](const glm::dvec3& c) {
+    return std::min({c.x, 1 - c.x, c.z, 1 - c.z});
+  };
   size_t members = 0;
   for (const PatchGroup& g : m.groups) {
     EXPECT_GE(g.members.size(), 2u);
-    EXPECT_LE(g.members.size(), 12u);
     members += g.members.size();
     glm::dvec3 lo(1e9), hi(-1e9);
-    for (int q : g.members)
+    double nearest = 1e9;
+    for (int q : g.members) {
+      EXPECT_EQ(m.patches[q].elements.size(), 4u);  // a tile, not a wall patch
+      EXPECT_GT(to_wall(m.patches[q].center), 0.1);  // not along a wall
+      nearest = std::min(nearest, to_wall(m.patches[q].center));
       for (int e : m.patches[q].elements)
         for (int k = 0; k < 4; ++k) {
           lo = glm::min(lo, m.verts[m.elems[e].v[k]]);
           hi = glm::max(hi, m.verts[m.elems[e].v[k]]);
         }
-    EXPECT_LE(glm::length(hi - lo), 0.5 + 1e-12);
+    }
+    EXPECT_LE(glm::length(hi - lo), kGroupReach * nearest + 1e-12);
     EXPECT_NEAR(g.area, 0.01 * double(g.members.size()), 1e-12);
     EXPECT_NEAR(g.normal.y, 1.0, 1e-12);
     EXPECT_NEAR(g.center.y, 0.0, 1e-12);
@@ -70,7 +80,10 @@ TEST(Groups, TilesOfOneFloorShootTogether) {
     EXPECT_TRUE(IsShooter(m, g.members[0]));
     EXPECT_FALSE(IsShooter(m, g.members[1]));
   }
-  EXPECT_EQ(members, 96u);  // 4 tiles left alone
+  // Pinned: the 36 tiles at least 0.25 from every wall (a pair is 0.22
+  // across) shoot as 16 groups.
+  EXPECT_EQ(m.groups.size(), 16u);
+  EXPECT_EQ(members, 36u);
   EXPECT_EQ(Shooters(m), m.patches.size() - members + m.groups.size());
   // The same groups every time (a worker derives them alike), none when off.
   EXPECT_EQ(MakeMesh(TiledBox(10), Half()).group_of, m.group_of);
@@ -82,9 +95,13 @@ TEST(Groups, TilesOfOneFloorShootTogether) {
 }
 
 // A group's shot: the members give up exactly their unshot power, what the
-// receivers gain is ρ·ΣxA·F, and no member receives from its own group.
-TEST(Groups, AGroupShotKeepsEnergyExactly) {
-  const Mesh m = MakeMesh(TiledBox(10), Half());
+// receivers gain is ρ·ΣxA·F, and no member receives from its own group;
+// on coplanar tiles and on tiles up to 0.003 above one another.
+class GroupShot : public testing::TestWithParam<double> {};
+INSTANTIATE_TEST_SUITE_P(Groups, GroupShot, testing::Values(0.0, 0.003));
+TEST_P(GroupShot, KeepsEnergyExactly) {
+  const Mesh m = MakeMesh(TiledBox(10, GetParam()), Half());
+  ASSERT_FALSE(m.groups.empty());
   Solver solver(m, false);
   Hemicube hc(64);
   std::vector<FormFactor> col;
@@ -179,6 +196,17 @@ TEST(Groups, NeverAcrossAWallNorFacingAwayNorOneBehindTheOther) {
   // Both up, 0.01 apart in height: near-coplanar, together.
   const int near = pair({{1.0, 0, -1.0}, {1.0, 0, -0.9}, {1.1, 0, -0.9}, {1.1, 0, -1.0}},
                         {{1.2, 0.01, -1.0}, {1.2, 0.01, -0.9}, {1.3, 0.01, -0.9}, {1.3, 0.01, -1.0}});
+  // Side by side like `plain`, but a small upright face above and beside
+  // them, facing them, lights nearer (0.23) than the pair is wide (0.32):
+  // apart. The same pair with it 0.61 away: together.
+  const int crowded = pair({{-1.0, 0, 1.0}, {-1.0, 0, 1.1}, {-0.9, 0, 1.1}, {-0.9, 0, 1.0}},
+                           {{-0.8, 0, 1.0}, {-0.8, 0, 1.1}, {-0.7, 0, 1.1}, {-0.7, 0, 1.0}});
+  AddFace(&s, {{-0.9, 0.1, 1.25}, {-0.9, 0.2, 1.25}, {-0.8, 0.2, 1.25}, {-0.8, 0.1, 1.25}}, grey,
+          glm::dvec3(0));
+  const int spaced = pair({{-1.0, 0, -1.0}, {-1.0, 0, -0.9}, {-0.9, 0, -0.9}, {-0.9, 0, -1.0}},
+                          {{-0.8, 0, -1.0}, {-0.8, 0, -0.9}, {-0.7, 0, -0.9}, {-0.7, 0, -1.0}});
+  AddFace(&s, {{-0.9, 0.5, -0.6}, {-0.9, 0.6, -0.6}, {-0.8, 0.6, -0.6}, {-0.8, 0.5, -0.6}}, grey,
+          glm::dvec3(0));
   // Tilted 40 degrees against each other (roof-like, both facing out): apart.
   const double c = std::cos(40 * M_PI / 180) * 0.1, h = std::sin(40 * M_PI / 180) * 0.1;
   const int tilted =
@@ -198,10 +226,13 @@ TEST(Groups, NeverAcrossAWallNorFacingAwayNorOneBehindTheOther) {
   EXPECT_FALSE(together(step));
   EXPECT_TRUE(together(near));
   EXPECT_FALSE(together(tilted));
+  EXPECT_FALSE(together(crowded));
+  EXPECT_TRUE(together(spaced));
   // The wall's own two faces face away from each other.
   EXPECT_FALSE(Grouped(m, patch(walled + 2), patch(walled + 3)));
-  // The big floor is no candidate: its patches are as large as the cell.
-  EXPECT_EQ(m.group_of[patch(0)], -1);
+  // The big floor's patches are the patch size: no candidates, though
+  // what they light (what faces down) is 1 and more away.
+  for (int q : m.faces[0].patches) EXPECT_EQ(m.group_of[q], -1);
 }
 
 }  // namespace

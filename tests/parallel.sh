@@ -52,11 +52,11 @@ write_mtl "$T/tiles.mtl" light "0 0 0" "5 5 5" wall "0.6 0.5 0.4" "0 0 0" floor 
 TILES=(-e 1e-5 -r 256 --patch-size 0.5 --no-join -v)
 if run_ok "tiles, sequential" "$T/tseq" -j 0 "${TILES[@]}" "$T/tiles.obj" &&
    run_ok "tiles, -j 2" "$T/tj2" -j 2 "${TILES[@]}" "$T/tiles.obj"; then
-  # 4 cells of 36 tiles, groups at most 0.5 across.
-  if grep -q " 36 shooters, 16 of them groups" "$T/tj2.err"; then
-    pass "tiles: the floor shoots as 16 groups"
+  # Groups no wider than the distance to the nearest wall (groups.h).
+  if grep -q " 125 shooters, 24 of them groups" "$T/tj2.err"; then
+    pass "tiles: the floor shoots as 24 groups"
   else
-    fail "tiles: the floor did not shoot as 16 groups ($(grep -o '[0-9]* shooters, [0-9]* of them groups' "$T/tj2.err"))"
+    fail "tiles: the floor did not shoot as 24 groups ($(grep -o '[0-9]* shooters, [0-9]* of them groups' "$T/tj2.err"))"
   fi
   check_same "tiles, groups: -j 2 agrees with -j 0" "$T/tj2/result.csv" "$T/tseq/result.csv" 1.5
 fi
