@@ -9,27 +9,29 @@
 namespace {
 double Abs(const glm::dvec3& u) { return std::abs(u.r) + std::abs(u.g) + std::abs(u.b); }
 
-// The variance that a shot's gain g (luminance) adds to an element's B when
-// it took g as form factor f, seen cos_a off the shooter's normal, from a
-// hemicube whose top-centre pixel has delta form factor pixel_ff (the
-// model and its derivation: subdivide.h). A pixel seen that way has delta
-// form factor pixel_ff · cos_a · cos³γ, γ its angle from the axis of the
-// hemicube face it is on; cos γ is the direction's largest component in
-// the hemicube's frame, at most max(cos_a, sin_a) however it is turned:
-// so n below is at least the pixels the element covers, and the variance
-// is not underestimated. Unknown direction (cos_a <= 0, where the patch
-// centre is behind the shooter and an element of it is not): pixel_ff.
-double ShotNoise(double g, double f, double pixel_ff, double cos_a) {
-  double df = pixel_ff;
-  if (cos_a > 0) {
-    const double m = std::max(cos_a, std::sqrt(std::max(0.0, 1 - cos_a * cos_a)));
-    df *= cos_a * m * m * m;
-  }
+// The delta form factor, at most, of a hemicube pixel seen cos_a off the
+// shooter's normal, for one whose top-centre pixel has pixel_ff (the
+// noise model and its derivation: subdivide.h). A pixel seen that way has
+// pixel_ff · cos_a · cos³γ, γ its angle from the axis of the hemicube face
+// it is on; cos γ is the direction's largest component in the hemicube's
+// frame, at most max(cos_a, sin_a) however the hemicube is turned: so the
+// pixels an element covers are not underestimated, nor its noise. Unknown
+// direction (cos_a <= 0, where a patch centre is behind the shooter and
+// an element of it is not): pixel_ff.
+double PixelFormFactor(double pixel_ff, double cos_a) {
+  if (!(cos_a > 0)) return pixel_ff;
+  const double m = std::max(cos_a, std::sqrt(std::max(0.0, 1 - cos_a * cos_a)));
+  return pixel_ff * cos_a * m * m * m;
+}
+
+// The variance that a shot's gain g (luminance) adds to an element's B
+// when it took g as form factor f, n = f / df pixels of delta form factor
+// df: Var(pixel count) / count² is 1/n for an element smaller than 4/9
+// pixel (hit or missed whole), (2/3) n^-3/2 for the pixels along its
+// outline.
+inline double ShotNoise(double g, double f, double df) {
   const double n = f / df;
-  // Var(pixel count) / count²: 1/n for an element smaller than 4/9 pixel
-  // (hit or missed whole), (2/3) n^-3/2 for the pixels along its outline.
-  const double rel2 = n < 4.0 / 9 ? 1 / n : (2.0 / 3) / (n * std::sqrt(n));
-  return g * g * rel2;
+  return g * g * (n < 4.0 / 9 ? 1 / n : (2.0 / 3) / (n * std::sqrt(n)));
 }
 }  // namespace
 
@@ -107,6 +109,7 @@ void Solver::TrackNoise(int resolution) {
   // centre, has delta form factor (2/R)² / π.
   pixel_ff_ = 4 / (M_PI * double(resolution) * resolution);
   noise_.resize(b_.size(), 0.0);
+  pixel_df_.resize(mesh_.patches.size());
 }
 
 void Solver::Resum() {
@@ -253,11 +256,15 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   // element's direction is taken as its patch centre's.
   const glm::dvec3 from = group ? group->center : center_[size_t(p)];
   const glm::dvec3 axis = group ? group->normal : mesh_.faces[mesh_.patches[p].face].normal;
-  auto noise = [&](int32_t q, const glm::dvec3& gain, double f) {
-    const glm::dvec3 d = center_[size_t(q)] - from;
-    const double len = glm::length(d);
-    return ShotNoise((gain.r + gain.g + gain.b) / 3, f, pixel_ff_,
-                     len > 0 ? glm::dot(d, axis) / len : 0.0);
+  // A receiving patch's pixel delta form factor, once per shot, at its
+  // first form factor (fsum_ still 0).
+  auto pixel = [&](int32_t q) {
+    if (fsum_[q] == 0) {
+      const glm::dvec3 d = center_[size_t(q)] - from;
+      const double len = glm::length(d);
+      pixel_df_[size_t(q)] = PixelFormFactor(pixel_ff_, len > 0 ? glm::dot(d, axis) / len : 0.0);
+    }
+    return pixel_df_[size_t(q)];
   };
   for (size_t i = 0; i < n; ++i) {
     if (i + kAhead < n) {
@@ -273,13 +280,13 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     if (q >= 0) {
       const glm::dvec3 gain = xa * (f * rho_per_area_[e]);
       b_[e] += gain;
-      if (noisy) noise_[e] += noise(q, gain, f);
+      if (noisy) noise_[e] += ShotNoise((gain.r + gain.g + gain.b) / 3, f, pixel(q));
       if (track_) Changed(e);
     } else {  // divided since the column was computed: each leaf gains alike
       q = ~q;
       mesh_.LeavesUnder(e, &leaves_);
       const glm::dvec3 gain = xa * (f * rho_per_area_[e]);
-      const double var = noisy ? noise(q, gain, f) : 0;
+      const double var = noisy ? ShotNoise((gain.r + gain.g + gain.b) / 3, f, pixel(q)) : 0;
       for (int l : leaves_) {
         b_[l] += gain;
         if (noisy) noise_[l] += var;

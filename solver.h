@@ -141,6 +141,7 @@ class Solver {
   std::vector<uint8_t> is_changed_; // per element: in changed_
   std::vector<double> noise_;       // per element when tracked: variance of Lum(B)
   double pixel_ff_ = 0;             // a top-centre pixel's delta form factor; 0: no noise
+  std::vector<double> pixel_df_;    // per patch: its pixels' in this shot's direction
   std::vector<int32_t> changed_;    // elements whose B changed, for TakeChanged
   bool track_ = false;              // since TakeChanged was first called
   std::vector<uint8_t> lit_;        // per patch: emits, or light reached it
