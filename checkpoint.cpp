@@ -137,6 +137,10 @@ std::string Implausible(const Checkpoint& k) {
     if (!finite(v)) return "a radiosity that is not a finite number";
   for (const glm::dvec3& v : s.unshot)
     if (!finite(v)) return "an unshot radiosity that is not a finite number";
+  if (!s.noise.empty() && s.noise.size() != k.elements)
+    return "the noise array does not match the element count";
+  for (double x : s.noise)
+    if (!(x >= 0) || !std::isfinite(x)) return "a noise variance that is not a finite number >= 0";
   if (!finite(s.unshot_sum) || !std::isfinite(s.abs_sum)) return "unshot sums not finite";
   if (s.shots < 0) return "a negative shot count";
   for (size_t p = 0; p < k.patches; ++p)
@@ -314,6 +318,7 @@ std::string EncodeCheckpoint(const Checkpoint& c) {
   PutArray(&w, s.lit, [&](uint8_t x) { PutU8(&w, x); });
   PutArray(&w, s.blind, [&](uint8_t x) { PutU8(&w, x); });
   PutArray(&w, s.times_shot, [&](int32_t x) { PutFixed32(&w, x); });
+  PutArray(&w, s.noise, [&](double x) { PutF64(&w, x); });
   PutU8(&w, c.has_subdivider);
   if (c.has_subdivider) {
     const SubdividerState& d = c.subdivider;
@@ -396,6 +401,8 @@ bool DecodeCheckpoint(const std::string& bytes, Checkpoint* c, std::string* err)
   for (uint8_t& x : s.blind) x = r.U8();
   s.times_shot.resize(r.Count(4));
   for (int32_t& x : s.times_shot) x = r.I32();
+  s.noise.resize(r.Count(8));
+  for (double& x : s.noise) x = r.F64();
   k.has_subdivider = r.Bool();
   if (k.has_subdivider) {
     SubdividerState& d = k.subdivider;

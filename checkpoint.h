@@ -6,11 +6,11 @@
 // on; with -j 0 it then makes the same shots as the run it continues, bit
 // for bit.
 //
-// File format, version 1; integers little-endian, f64 IEEE 754 bits:
+// File format, version 3; integers little-endian, f64 IEEE 754 bits:
 //
 //   offset  size  field
 //   0       8     magic "RADCKPT\n"
-//   8       4     u32 version (1)
+//   8       4     u32 version (3)
 //   12      4     u32 reserved, 0
 //   16      8     u64 N: payload length
 //   24      N     payload
@@ -32,7 +32,8 @@
 //   edits     ARRAY<i32>: the elements divided, in the order Divide() ran
 //   solver    i64 shots, vec unshot_sum, f64 abs_sum, ARRAY<vec> B per
 //             element, ARRAY<vec> unshot per patch, ARRAY<u8> lit,
-//             ARRAY<u8> blind, ARRAY<i32> times shot
+//             ARRAY<u8> blind, ARRAY<i32> times shot, ARRAY<f64> noise
+//             per element (empty when the run does not divide)
 //   subdiv    u8 present; if 1: f64 threshold, i64 last_pass, i64
 //             wave_start_leaves, i64 divided_in_wave, u8 finished, u8
 //             quiet, i64 passes, f64 seconds
@@ -55,7 +56,7 @@
 #include "scene.h"
 #include "subdivide.h"
 
-constexpr uint32_t kCheckpointVersion = 2;
+constexpr uint32_t kCheckpointVersion = 3;
 
 // The options that shape the answer: a checkpoint is resumed only with
 // the same ones.

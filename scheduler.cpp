@@ -21,7 +21,8 @@ bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wa
   if (!subdivider->Due(shots_in_wave)) return false;
   const double t0 = ThreadCpuSeconds();
   solver->TakeChanged(changed);
-  *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->Ambient(), shots_in_wave, *changed);
+  *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->noise(), solver->Ambient(),
+                            shots_in_wave, *changed);
   for (int32_t e : *edits) Divide(mesh, e);
   solver->Divided(*edits);
   subdivider->CountTime(ThreadCpuSeconds() - t0);
@@ -93,6 +94,8 @@ class Scheduler {
       r_.columns = r->columns;
       pending_.assign(r->pending.begin(), r->pending.end());
     }
+    // The dividing factor discounts the hemicube's noise (subdivide.h).
+    if (sub) solver->TrackNoise(opts.resolution);
   }
   RunResult Run();
 

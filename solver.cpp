@@ -8,6 +8,31 @@
 
 namespace {
 double Abs(const glm::dvec3& u) { return std::abs(u.r) + std::abs(u.g) + std::abs(u.b); }
+
+// The delta form factor, at most, of a hemicube pixel seen cos_a off the
+// shooter's normal, for one whose top-centre pixel has pixel_ff (the
+// noise model and its derivation: subdivide.h). A pixel seen that way has
+// pixel_ff · cos_a · cos³γ, γ its angle from the axis of the hemicube face
+// it is on; cos γ is the direction's largest component in the hemicube's
+// frame, at most max(cos_a, sin_a) however the hemicube is turned: so the
+// pixels an element covers are not underestimated, nor its noise. Unknown
+// direction (cos_a <= 0, where a patch centre is behind the shooter and
+// an element of it is not): pixel_ff.
+double PixelFormFactor(double pixel_ff, double cos_a) {
+  if (!(cos_a > 0)) return pixel_ff;
+  const double m = std::max(cos_a, std::sqrt(std::max(0.0, 1 - cos_a * cos_a)));
+  return pixel_ff * cos_a * m * m * m;
+}
+
+// The variance that a shot's gain g (luminance) adds to an element's B
+// when it took g as form factor f, n = f / df pixels of delta form factor
+// df: Var(pixel count) / count² is 1/n for an element smaller than 4/9
+// pixel (hit or missed whole), (2/3) n^-3/2 for the pixels along its
+// outline.
+inline double ShotNoise(double g, double f, double df) {
+  const double n = f / df;
+  return g * g * (n < 4.0 / 9 ? 1 / n : (2.0 / 3) / (n * std::sqrt(n)));
+}
 }  // namespace
 
 Solver::Solver(const Mesh& mesh, bool overshoot)
@@ -20,6 +45,7 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
     const MeshFace& f = mesh.faces[mesh.patches[p].face];
     const double a = mesh.patches[p].area;
     rho_.push_back(f.rho);
+    center_.push_back(mesh.patches[p].center);
     area_.push_back(a);
     weight_.push_back(a * std::max({f.rho.r, f.rho.g, f.rho.b}));
     total_area_ += a;
@@ -47,6 +73,7 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
 void Solver::NewWave() {
   Grow();
   for (size_t e = 0; e < b_.size(); ++e) b_[e] = mesh_.FaceOf(int(e)).emission;
+  if (pixel_ff_ > 0) noise_.assign(b_.size(), 0.0);
   unshot_.resize(mesh_.patches.size());
   lit_.resize(mesh_.patches.size());
   for (size_t p = 0; p < unshot_.size(); ++p) {
@@ -66,12 +93,21 @@ void Solver::Grow() {
   b_.resize(n);
   patch_of_.resize(n);
   is_changed_.resize(n, 0);
+  if (pixel_ff_ > 0) noise_.resize(n, 0.0);
   // Only added elements and their parents (divided since): O(divisions).
   for (size_t e = from; e < n; ++e) {
     const Element& el = mesh_.elems[e];
     patch_of_[e] = el.IsLeaf() ? el.patch : ~el.patch;
     if (el.parent >= 0 && size_t(el.parent) < from) patch_of_[size_t(el.parent)] = ~el.patch;
   }
+}
+
+void Solver::TrackNoise(int resolution) {
+  // The top face spans 2 × 2 at unit height: a pixel (2/R)² there, at its
+  // centre, has delta form factor (2/R)² / π.
+  pixel_ff_ = 4 / (M_PI * double(resolution) * resolution);
+  noise_.resize(b_.size(), 0.0);
+  pixel_df_.resize(mesh_.patches.size());
 }
 
 void Solver::Resum() {
@@ -213,12 +249,28 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   constexpr size_t kAhead = 16;
   const FormFactor* col = column.data();
   const size_t n = column.size();
+  const bool noisy = pixel_ff_ > 0;
+  // Where the hemicube looked from (Hemicube::Column), for the noise: each
+  // element's direction is taken as its patch centre's.
+  const glm::dvec3 from = group ? group->center : center_[size_t(p)];
+  const glm::dvec3 axis = group ? group->normal : mesh_.faces[mesh_.patches[p].face].normal;
+  // A receiving patch's pixel delta form factor, once per shot, at its
+  // first form factor (fsum_ still 0).
+  auto pixel = [&](int32_t q) {
+    if (fsum_[q] == 0) {
+      const glm::dvec3 d = center_[size_t(q)] - from;
+      const double len = glm::length(d);
+      pixel_df_[size_t(q)] = PixelFormFactor(pixel_ff_, len > 0 ? glm::dot(d, axis) / len : 0.0);
+    }
+    return pixel_df_[size_t(q)];
+  };
   for (size_t i = 0; i < n; ++i) {
     if (i + kAhead < n) {
       const int32_t a = col[i + kAhead].elem;
       __builtin_prefetch(&b_[size_t(a)], 1);
       __builtin_prefetch(&mesh_.elems[size_t(a)].area);
       __builtin_prefetch(&patch_of_[size_t(a)]);
+      if (noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
     }
     const int32_t e = col[i].elem;
     int32_t q = patch_of_[e];
@@ -227,14 +279,18 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     // copy per element (24 bytes an element): the same division, so the
     // same bits.
     if (q >= 0) {
-      b_[e] += xa * (f * (rho_[size_t(q)] / mesh_.elems[size_t(e)].area));
+      const glm::dvec3 gain = xa * (f * (rho_[size_t(q)] / mesh_.elems[size_t(e)].area));
+      b_[e] += gain;
+      if (noisy) noise_[e] += ShotNoise((gain.r + gain.g + gain.b) / 3, f, pixel(q));
       if (track_) Changed(e);
     } else {  // divided since the column was computed: each leaf gains alike
       q = ~q;
       mesh_.LeavesUnder(e, &leaves_);
       const glm::dvec3 gain = xa * (f * (rho_[size_t(q)] / mesh_.elems[size_t(e)].area));
+      const double var = noisy ? ShotNoise((gain.r + gain.g + gain.b) / 3, f, pixel(q)) : 0;
       for (int l : leaves_) {
         b_[l] += gain;
+        if (noisy) noise_[l] += var;
         if (track_) Changed(l);
       }
     }
@@ -291,6 +347,8 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
   for (int32_t p : elems)
     for (int k = 0; k < kChildren; ++k) {
       b_[mesh_.elems[p].first_child + k] = b_[p];
+      // What they have is the parent's, and so is its error.
+      if (pixel_ff_ > 0) noise_[mesh_.elems[p].first_child + k] = noise_[p];
       if (track_) Changed(mesh_.elems[p].first_child + k);
     }
   // Fitted to the values as they are now (elements divided in this pass
@@ -372,6 +430,7 @@ SolverState Solver::State() const {
   s.lit = lit_;
   s.blind = blind_;
   s.times_shot.assign(times_shot_.begin(), times_shot_.end());
+  s.noise = noise_;
   s.unshot_sum = unshot_sum_;
   s.abs_sum = abs_sum_;
   s.shots = shots_;
@@ -381,7 +440,8 @@ SolverState Solver::State() const {
 bool Solver::Restore(const SolverState& s, std::string* err) {
   const size_t np = mesh_.patches.size();
   if (s.b.size() != mesh_.elems.size() || s.unshot.size() != np || s.lit.size() != np ||
-      s.blind.size() != np || s.times_shot.size() != np) {
+      s.blind.size() != np || s.times_shot.size() != np ||
+      (!s.noise.empty() && s.noise.size() != mesh_.elems.size())) {
     *err = "solver state of " + std::to_string(s.b.size()) + " elements and " +
            std::to_string(s.unshot.size()) + " patches, the mesh has " +
            std::to_string(mesh_.elems.size()) + " and " + std::to_string(np);
@@ -393,6 +453,7 @@ bool Solver::Restore(const SolverState& s, std::string* err) {
   lit_ = s.lit;
   blind_ = s.blind;
   times_shot_.assign(s.times_shot.begin(), s.times_shot.end());
+  noise_ = s.noise;
   unshot_sum_ = s.unshot_sum;
   abs_sum_ = s.abs_sum;
   shots_ = s.shots;

@@ -26,6 +26,7 @@ struct SolverState {
   std::vector<glm::dvec3> unshot;     // per patch
   std::vector<uint8_t> lit, blind;    // per patch
   std::vector<int32_t> times_shot;    // per patch
+  std::vector<double> noise;          // per element, when tracked (TrackNoise)
   glm::dvec3 unshot_sum{0.0};         // the running sums as they are, drift
   double abs_sum = 0;                 // included, so that a resumed run
   long shots = 0;                     // makes the same choices bit for bit
@@ -62,6 +63,19 @@ class Solver {
   // what an element since divided receives goes to every leaf under it
   // alike.
   void Shoot(int p, const std::vector<FormFactor>& column);
+
+  // From now on Shoot also sums, per element, the variance its luminance
+  // B has from the hemicube's pixels at resolution R (noise(); what the
+  // dividing factor discounts, subdivide.h): the light a shot brings to an
+  // element is counted in whole pixels, so it is off by a few pixels'
+  // delta form factors, more the fewer pixels the element covers. Costs
+  // 8 bytes an element and a little per form factor in Shoot; a run that
+  // divides nothing does not call it. Keeps a restored noise().
+  void TrackNoise(int resolution);
+  // Per element: the variance of its luminance B from the hemicube's
+  // pixels (TrackNoise), a divided element's children have their
+  // parent's; empty when not tracked.
+  const std::vector<double>& noise() const { return noise_; }
 
   // The elements whose radiosity changed since the last call (each once;
   // those Divided() made included), into *out: what a division pass needs
@@ -118,11 +132,15 @@ class Solver {
   std::vector<glm::dvec3> b_;       // per element
   std::vector<int32_t> patch_of_;   // per element, compact for Shoot
   std::vector<glm::dvec3> rho_;     // per patch: its face's, compact for Shoot
+  std::vector<glm::dvec3> center_;  // per patch, for the noise's direction
   std::vector<double> area_;        // per patch, likewise
   std::vector<glm::dvec3> unshot_;  // per patch
   std::vector<double> fsum_;        // per patch: Σ F within one Shoot
   std::vector<int32_t> touched_;    // patches with fsum_ != 0
   std::vector<uint8_t> is_changed_; // per element: in changed_
+  std::vector<double> noise_;       // per element when tracked: variance of Lum(B)
+  double pixel_ff_ = 0;             // a top-centre pixel's delta form factor; 0: no noise
+  std::vector<double> pixel_df_;    // per patch: its pixels' in this shot's direction
   std::vector<int32_t> changed_;    // elements whose B changed, for TakeChanged
   bool track_ = false;              // since TakeChanged was first called
   std::vector<uint8_t> lit_;        // per patch: emits, or light reached it

@@ -9,6 +9,10 @@ namespace {
 
 double Lum(const glm::dvec3& x) { return (x.r + x.g + x.b) / 3; }
 
+// Standard deviations of pixel noise a difference must pass to count
+// (subdivide.h).
+constexpr double kNoiseSigmas = 3.5;
+
 double LongestEdge(const Mesh& m, const Element& e) {
   const int n = e.IsTriangle() ? 3 : 4;
   double l = 0;
@@ -82,7 +86,8 @@ double Subdivider::PassBound(int k, const glm::dvec3& ambient, double mean) cons
 // The dividing factor of leaf e (subdivide.h). *bounded: false when a
 // term had s < 0 or no positive scale, where PassBound does not hold.
 double Subdivider::Factor(const Mesh& mesh, const std::vector<glm::dvec3>& b,
-                          const glm::dvec3& ambient, double mean, int e, bool* bounded) {
+                          const std::vector<double>& noise, const glm::dvec3& ambient,
+                          double mean, int e, bool* bounded) {
   std::vector<int>& nb = nb_;
   const Element& el = mesh.elems[size_t(e)];
   LeafNeighbours(mesh, e, &nb);
@@ -99,18 +104,23 @@ double Subdivider::Factor(const Mesh& mesh, const std::vector<glm::dvec3>& b,
     if (!(scale > 0) || !(std::max(be, bm) >= 0)) *bounded = false;
     if (!(scale > 0)) continue;
     const double finer = 1 + 0.5 * std::max(0, mesh.elems[size_t(m)].level - el.level);
-    factor = std::max(factor, std::abs(be - bm) / dist * size / scale * finer);
+    // A difference the hemicube's pixels could have made is no light's.
+    const double diff = std::abs(be - bm);
+    const double light =
+        noise.empty() || diff > kNoiseSigmas * std::sqrt(noise[size_t(e)] + noise[size_t(m)]) ? diff : 0;
+    factor = std::max(factor, light / dist * size / scale * finer);
   }
   return factor;
 }
 
 std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
+                                      const std::vector<double>& noise,
                                       const glm::dvec3& ambient, long shots,
                                       const std::vector<int32_t>& changed) {
   last_pass_ = shots;
   ++passes_;
   const size_t n = mesh.elems.size();
-  CHECK(b.size() == n);
+  CHECK(b.size() == n && (noise.empty() || noise.size() == n));
   Track(mesh);
   double sum = 0, area = 0;  // the lit scene's mean: the absolute part of the scale
   for (size_t e = 0; e < n; ++e) {
@@ -159,7 +169,7 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::d
   std::vector<int32_t> out;
   for (int32_t e : todo) {
     bool bounded;
-    const double factor = Factor(mesh, b, ambient, mean, e, &bounded);
+    const double factor = Factor(mesh, b, noise, ambient, mean, e, &bounded);
     factor_[size_t(e)] = bounded ? factor : HUGE_VAL;
     at_pass_[size_t(e)] = pass;
     if (factor > threshold_) out.push_back(e);

@@ -32,13 +32,7 @@ csv=bench/results/groups.csv
 echo "scene,faces,surfaces,limit_s,build,shooters,groups,patches,elements_start,elements_end,shots_1e2,s_1e2,shots_1e3,s_1e3,end_s,end_unshot,rel_rms_vs_no_groups" >"$csv"
 
 # relrms A.csv REF.csv: results.cpp's RmsError, relative, in percent.
-relrms() {
-  awk -F, 'FNR == 1 { next }
-    NR == FNR { r[$1] = $4; g[$1] = $5; b[$1] = $6; next }
-    { a = $3; dr = $4 - r[$1]; dg = $5 - g[$1]; db = $6 - b[$1]
-      se += a * (dr * dr + dg * dg + db * db) / 3; m += a * (r[$1] + g[$1] + b[$1]) / 3; A += a }
-    END { if (m > 0) printf "%.3f%%", 100 * sqrt(se / A) / (m / A); else print "-" }' "$2" "$1"
-}
+relrms() { awk -F, -f bench/relrms.awk "$2" "$1"; }
 
 # run NAME BUILD-LABEL BINARY OBJ [OPTIONS]: one run, one table row.
 run() {

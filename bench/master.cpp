@@ -77,6 +77,7 @@ int main(int argc, char** argv) {
   std::vector<int32_t> changed;
   for (int round = 0; round < (divide ? 1 : 3); ++round) {
     Solver solver(mesh, overshoot);
+    if (divide) solver.TrackNoise(res);  // as the run loop does when it divides
     SubdivideOptions so;
     so.waves = false;
     so.incremental = !every_leaf;
@@ -114,7 +115,7 @@ int main(int argc, char** argv) {
         t0 = ThreadCpuSeconds();  // a pass takes milliseconds: the CPU clock's cost is nothing
         solver.TakeChanged(&changed);
         const std::vector<int32_t> edits =
-            sub.Pass(mesh, solver.radiosity(), solver.Ambient(), done + 1, changed);
+            sub.Pass(mesh, solver.radiosity(), solver.noise(), solver.Ambient(), done + 1, changed);
         evaluated += sub.evaluated();
         leaves += mesh.LeafCount();
         policy_s += ThreadCpuSeconds() - t0;

@@ -240,8 +240,10 @@ CEILING_HOLES = True
 
 # ---------------------------------------------------------------- Cornell box
 
-def cornell():
-    s = Scene('cornell', """\
+def cornell(holes=False):
+    """HOLES: the floor is cut around the blocks' footprints (cornell-holes),
+    so that no floor lies in the dark under them."""
+    s = Scene('cornell-holes' if holes else 'cornell', """\
 Cornell box, after the Cornell University Program of Computer Graphics
 "Cornell Box" data page (https://www.graphics.cornell.edu/online/box/data.html).
 Units are millimetres; the box is open at z = 0, toward the camera.
@@ -258,6 +260,10 @@ Changes from the published data:
   Ke is in arbitrary units (pictures are auto-exposed).
 The camera is the published one: at (278, 273, -800), looking along +z,
 focal length 35 mm on a 25 mm film: vertical field of view 39.3 degrees.""")
+    if holes:
+        s.header += """
+Here the floor is cut into convex pieces around the blocks' footprints:
+no floor lies in the dark under the blocks."""
     s.material('white', (0.73, 0.73, 0.73))
     s.material('red', (0.63, 0.065, 0.05))
     s.material('green', (0.14, 0.45, 0.091))
@@ -266,8 +272,14 @@ focal length 35 mm on a 25 mm film: vertical field of view 39.3 degrees.""")
 
     X, Y, Z = 556.0, 548.8, 559.2
     up, down = (0, 1, 0), (0, -1, 0)
+    short_top = [(130, 65), (82, 225), (240, 272), (290, 114)]
+    tall_top = [(423, 247), (265, 296), (314, 456), (472, 406)]
     s.obj('floor')
-    s.face('white', [(X, 0, 0), (0, 0, 0), (0, 0, Z), (X, 0, Z)], up)
+    if holes:
+        for piece in floor_around([short_top, tall_top], X, Z):
+            s.face('white', [(x, 0, z) for x, z in piece], up)
+    else:
+        s.face('white', [(X, 0, 0), (0, 0, 0), (0, 0, Z), (X, 0, Z)], up)
     s.obj('ceiling')
     if CEILING_HOLES:
         xs, zs = [0.0, 213.0, 343.0, X], [0.0, 227.0, 332.0, Z]
@@ -303,8 +315,8 @@ focal length 35 mm on a 25 mm film: vertical field of view 39.3 degrees.""")
             s.face('white', quad, (out[0], 0, out[2]))
         s.solids.append(Prism(top, 0, h))
 
-    block('short_block', [(130, 65), (82, 225), (240, 272), (290, 114)], 165.0)
-    block('tall_block', [(423, 247), (265, 296), (314, 456), (472, 406)], 330.0)
+    block('short_block', short_top, 165.0)
+    block('tall_block', tall_top, 330.0)
 
     s.inside = lambda p: 0 < p[0] < X and 0 < p[1] < Y and 0 < p[2] < Z
 
@@ -322,6 +334,33 @@ focal length 35 mm on a 25 mm film: vertical field of view 39.3 degrees.""")
         if s.air(p):
             s.air_points.append(p)
     return s
+
+
+def floor_around(holes, X, Z):
+    """The rectangle [0, X] x [0, Z] less the convex HOLES ((x, z) corners),
+    as convex pieces: cut at every hole corner's x, each slab's free z
+    intervals between the holes' edges are trapezoids (triangles where an
+    interval ends in a corner). Pieces meet hole corners in T-junctions."""
+    xs = sorted(set([0.0, X] + [float(x) for h in holes for x, _ in h]))
+    def cut(h, x):  # the z interval of convex polygon h on the line at x, or None
+        zs = []
+        for i in range(len(h)):
+            (xa, za), (xb, zb) = h[i], h[(i + 1) % len(h)]
+            if min(xa, xb) <= x <= max(xa, xb):
+                zs += [za, zb] if xa == xb else [za + (x - xa) * (zb - za) / (xb - xa)]
+        return (min(zs), max(zs)) if zs else None
+    pieces = []
+    for x0, x1 in zip(xs, xs[1:]):
+        xm = 0.5 * (x0 + x1)
+        inside = sorted([h for h in holes if cut(h, xm)], key=lambda h: cut(h, xm)[0])
+        lo0 = lo1 = 0.0
+        for h in inside + [None]:
+            hi0, hi1 = (cut(h, x0)[0], cut(h, x1)[0]) if h else (Z, Z)
+            pts = [(x0, lo0), (x1, lo1), (x1, hi1), (x0, hi0)]
+            pieces.append([p for i, p in enumerate(pts) if p != pts[i - 1]])
+            if h:
+                lo0, lo1 = cut(h, x0)[1], cut(h, x1)[1]
+    return pieces
 
 # ---------------------------------------------------------------- room
 
@@ -823,7 +862,7 @@ def main(argv):
     args = [a for a in argv if not a.startswith('--')]
     outdir = args[0] if args else os.path.dirname(os.path.abspath(__file__))
     ok = True
-    for make in (cornell, room, maze):
+    for make in (cornell, lambda: cornell(holes=True), room, maze):
         s = make()
         errors = check(s)
         for e in errors:

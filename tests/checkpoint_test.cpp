@@ -103,6 +103,7 @@ Checkpoint Filled() {
 Checkpoint Plausible() {
   Checkpoint c = Filled();
   c.solver.b.resize(c.elements, glm::dvec3(0.125));
+  c.solver.noise.assign(c.elements, 0.5);
   c.solver.shots = 40;
   return c;
 }
@@ -127,6 +128,7 @@ TEST(Checkpoint, RoundTrip) {
   EXPECT_EQ(b.solver.b, a.solver.b);
   EXPECT_TRUE(std::signbit(b.solver.b[1].x));
   EXPECT_EQ(b.solver.times_shot, a.solver.times_shot);
+  EXPECT_EQ(b.solver.noise, a.solver.noise);
   EXPECT_EQ(b.subdivider.threshold, 0.35);
   EXPECT_TRUE(b.subdivider.quiet);
   EXPECT_EQ(b.run.best, HUGE_VAL);
@@ -135,14 +137,15 @@ TEST(Checkpoint, RoundTrip) {
   EXPECT_EQ(CompareOptions(a.options, b.options), "");
 }
 
-// Format 2 (format 1 plus the two group options, 9 bytes) pinned byte for
-// byte (the trailing SHA-256 covers every byte before it), and the scene
-// and mesh hashes a checkpoint is checked against are those format 1 had.
-TEST(Checkpoint, BytesAndHashesAreThoseOfFormat2) {
+// Format 3 (format 1 plus the two group options, 9 bytes, in 2; plus the
+// noise array, its 8-byte count here, in 3) pinned byte for byte (the
+// trailing SHA-256 covers every byte before it), and the scene and mesh
+// hashes a checkpoint is checked against are those format 1 had.
+TEST(Checkpoint, BytesAndHashesAreThoseOfFormat3) {
   const std::string bytes = EncodeCheckpoint(Filled());
-  EXPECT_EQ(bytes.size(), 606u);
+  EXPECT_EQ(bytes.size(), 614u);
   EXPECT_EQ(Hex(bytes.substr(bytes.size() - 32)),
-            "f34bc114ccc9c4502115856a566fbd5ac58a7c98a636aa169b21ad012384f5b4");
+            "895d04f03478380d7693f2261c76190d6162f6d258f7080728fb0d9d1c085758");
   EXPECT_EQ(Hex(SceneHash(ShadowScene())),
             "e5ded178170e67915e7e2c974f2f76313e56922c54aa9ce557da0635a7ee8021");
   EXPECT_EQ(MeshHash(MakeMesh(ShadowScene(), ShadowMesh())), 0x4305479c346ad8daull);
@@ -182,7 +185,7 @@ TEST(Checkpoint, ForeignAndOtherVersionsAreRefused) {
   EXPECT_EQ(Error(""), "not a radiosity checkpoint (no RADCKPT magic)");
   std::string v1 = EncodeCheckpoint(Filled());
   v1[8] = 1;
-  EXPECT_EQ(Error(v1), "checkpoint format version 1, this radiosity reads 2");
+  EXPECT_EQ(Error(v1), "checkpoint format version 1, this radiosity reads 3");
 }
 
 // An edited checkpoint, re-hashed so that its checksum holds: values no
@@ -201,6 +204,10 @@ TEST(Checkpoint, ValuesAreCheckedAfterTheChecksum) {
       {"an unshot radiosity that is not a finite number",
        [](Checkpoint* c) { c->solver.unshot[1].b = -HUGE_VAL; }},
       {"unshot sums not finite", [](Checkpoint* c) { c->solver.abs_sum = NAN; }},
+      {"a noise variance that is not a finite number >= 0",
+       [](Checkpoint* c) { c->solver.noise[2] = -1; }},
+      {"the noise array does not match the element count",
+       [](Checkpoint* c) { c->solver.noise.pop_back(); }},
       {"a negative shot count", [](Checkpoint* c) { c->solver.shots = -1; }},
       {"patch 2's flags or shot count out of range", [](Checkpoint* c) { c->solver.lit[2] = 7; }},
       {"patch 0's flags or shot count out of range", [](Checkpoint* c) { c->solver.times_shot[0] = 41; }},

@@ -249,7 +249,7 @@ RunResult Adaptive(Mesh* m, Solver* s, Subdivider* sub, double eps, int res = 64
   return RunSequential(m, o, s, sub, nullptr);
 }
 
-// Smooth light is never divided: the furnace, and two far squares.
+// Smooth light is never divided: the furnace (and FarSquares, below).
 TEST(Subdivider, SmoothLightIsNotDivided) {
   {
     Scene s = Box(1.0, {glm::dvec3(0.9)}, {glm::dvec3(1.0)});
@@ -264,18 +264,67 @@ TEST(Subdivider, SmoothLightIsNotDivided) {
     EXPECT_EQ(r.waves, 1);
     for (const glm::dvec3& b : FaceRadiosity(m, solver.radiosity())) EXPECT_NEAR(b.r, 10, 0.05);
   }
-  {
-    Scene s = EmptyScene();
-    AddFace(&s, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, glm::dvec3(0), glm::dvec3(1));
-    AddFace(&s, {{0, 0, 4}, {0, 1, 4}, {1, 1, 4}, {1, 0, 4}}, glm::dvec3(1), glm::dvec3(0));
-    Mesh m = MakeMesh(s);
+}
+
+// Two squares 4 apart, one the light: the other is lit within 6%, and at
+// R 64 its elements are about a pixel of each shot, counted ±100%. The
+// dividing factor takes that for noise, not light (subdivide.h), at every
+// resolution.
+Scene FarSquares() {
+  Scene s = EmptyScene();
+  AddFace(&s, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, glm::dvec3(0), glm::dvec3(1));
+  AddFace(&s, {{0, 0, 4}, {0, 1, 4}, {1, 1, 4}, {1, 0, 4}}, glm::dvec3(1), glm::dvec3(0));
+  return s;
+}
+
+TEST(Subdivider, UniformLightIsNotDividedAtAnyResolution) {
+  for (int res : {64, 128, 256, 512}) {
+    Mesh m = MakeMesh(FarSquares());
     const long n = m.LeafCount();
     Solver solver(m, true);
     Subdivider sub(&m, SubdivideOptions());
-    // At the default resolution, as tests/formfactor.sh runs it (at R = 64
-    // an element far away is a pixel or two: noise, not light, varies).
-    ASSERT_EQ(Adaptive(&m, &solver, &sub, 1e-6, 256).status, RunStatus::kConverged);
-    EXPECT_EQ(m.LeafCount(), n);
+    ASSERT_EQ(Adaptive(&m, &solver, &sub, 1e-6, res).status, RunStatus::kConverged);
+    EXPECT_GT(sub.passes(), 0);
+    EXPECT_EQ(m.LeafCount(), n) << "R " << res;
+  }
+}
+
+// The variance Shoot adds (Solver::TrackNoise) against the spread of what
+// the squares' receiver gets from one light patch over 64 turns of the
+// hemicube: summed over its elements, the model is 1 to 5 times the
+// measured variance (its sigma 1 to 2.2 times; it errs toward dividing
+// less: straight outlines lose and gain fewer pixels than random ones)
+// at R 64 and R 256.
+TEST(Solver, NoiseIsAboutTheSpreadOfTurnedHemicubes) {
+  const Mesh m = MakeMesh(FarSquares());
+  for (int res : {64, 256}) {
+    Hemicube h(res);
+    std::vector<double> sum(m.elems.size()), sum2(m.elems.size()), model(m.elems.size());
+    constexpr int kTurns = 64;
+    std::vector<FormFactor> col;
+    for (int k = 0; k < kTurns; ++k) {
+      Solver solver(m, false);
+      solver.TrackNoise(res);
+      ShotColumn(&h, m, 0, k, true, 1, &col);
+      solver.Shoot(0, col);
+      for (size_t e = 0; e < m.elems.size(); ++e) {
+        const glm::dvec3& b = solver.radiosity()[e];
+        const double lum = (b.r + b.g + b.b) / 3;
+        sum[e] += lum;
+        sum2[e] += lum * lum;
+        model[e] += solver.noise()[e];
+      }
+    }
+    double measured = 0, modelled = 0;
+    for (size_t e = 0; e < m.elems.size(); ++e) {
+      if (m.patches[m.elems[e].patch].face != 1) continue;
+      const double mean = sum[e] / kTurns;
+      measured += sum2[e] / kTurns - mean * mean;
+      modelled += model[e] / kTurns;
+    }
+    EXPECT_GT(modelled, measured) << "R " << res;
+    EXPECT_LT(modelled, 5 * measured) << "R " << res;
+    std::printf("R %d: modelled variance %.3g, measured %.3g\n", res, modelled, measured);
   }
 }
 
@@ -293,6 +342,13 @@ Scene ShadowScene() {
           glm::dvec3(100));  // the light, facing down
   return s;
 }
+
+// The shadow's floor elements are 1/16 of their distance from the light
+// across: about 4 of its pixels at R 64, where one shot counts them ±25%
+// and even the shadow's full edge is at the limit of what the dividing
+// factor takes for light (subdivide.h); at R 128, 16 pixels, it is far
+// beyond.
+constexpr int kShadowRes = 128;
 
 TEST(Subdivider, SharpShadowIsDividedAlongItsEdge) {
   Scene s = ShadowScene();
@@ -348,7 +404,7 @@ TEST(Subdivider, WithoutWavesOneWave) {
   SubdivideOptions so;
   so.waves = false;
   Subdivider sub(&m, so);
-  RunResult r = Adaptive(&m, &solver, &sub, 1e-3);
+  RunResult r = Adaptive(&m, &solver, &sub, 1e-3, kShadowRes);
   EXPECT_EQ(r.status, RunStatus::kConverged);
   EXPECT_EQ(r.waves, 1);
   EXPECT_GT(m.LeafCount(), int(m.patches.size()) * 4);
@@ -366,7 +422,7 @@ TEST(Subdivider, StopsAtTheElementCap) {
   SubdivideOptions so;
   so.max_elements = long(built) + 2 * kChildren;  // room for two divisions, not a pass
   Subdivider sub(&m, so);
-  RunResult r = Adaptive(&m, &solver, &sub, 1e-3);
+  RunResult r = Adaptive(&m, &solver, &sub, 1e-3, kShadowRes);
   EXPECT_EQ(r.status, RunStatus::kConverged);
   EXPECT_TRUE(sub.capped());
   EXPECT_TRUE(sub.finished());
@@ -391,7 +447,7 @@ TEST(Subdivider, IncrementalPassesDivideAsEvaluatingEveryLeaf) {
       Subdivider sub(&m[i], so);
       Solver solver(m[i], over);
       RunOptions o;
-      o.resolution = 64;
+      o.resolution = kShadowRes;
       o.overshoot = over;
       o.epsilon = 1e-3;
       o.log_every = 1;
@@ -408,6 +464,25 @@ TEST(Subdivider, IncrementalPassesDivideAsEvaluatingEveryLeaf) {
     EXPECT_EQ(MeshHash(m[0]), MeshHash(m[1]));
     EXPECT_TRUE(b[0] == b[1]) << "overshoot " << over;
   }
+}
+
+// Division by light, not by noise: the shadow scene divides about as much
+// at R 128 as at R 256 (paper-size elements see 16 and 64 pixels of the
+// light: the same edges are resolved at both).
+TEST(Subdivider, ElementsAtR128AndR256AreAlike) {
+  long leaves[2];
+  for (int i = 0; i < 2; ++i) {
+    MeshOptions o;
+    o.patch_size = 0.25;
+    Mesh m = MakeMesh(ShadowScene(), o);
+    Solver solver(m, true);
+    Subdivider sub(&m, SubdivideOptions());
+    ASSERT_EQ(Adaptive(&m, &solver, &sub, 1e-3, i ? 256 : 128).status, RunStatus::kConverged);
+    leaves[i] = m.LeafCount();
+  }
+  EXPECT_LT(std::max(leaves[0], leaves[1]), 1.5 * double(std::min(leaves[0], leaves[1])))
+      << "R 128: " << leaves[0] << ", R 256: " << leaves[1];
+  std::printf("shadow: %ld elements at R 128, %ld at R 256\n", leaves[0], leaves[1]);
 }
 
 }  // namespace
