@@ -125,6 +125,9 @@ class Hemicube {
   static constexpr int kTile = 8;
   std::vector<float> tile_min_;
   std::vector<uint8_t> dirty_;
+  // Per hemicube face, the rows [first, last) Scan wrote since the last
+  // readback, which reads and clears only those.
+  int rows_[5][2] = {{INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}};
 
   Key key_;
   // Faces with leaves in the hierarchy's order, and their outlines in that
@@ -143,6 +146,7 @@ class Hemicube {
   float near_ = 0;
   double coplanar_ = 0, margin_ = 0;
   int32_t self_ = -1;                // the shooter's group (its members are skipped), or -1
+  std::vector<int> self_faces_;      // the mesh faces of its members, sorted
   std::vector<float> lx_, ly_, lz_;  // face vertices in the shooter frame
   std::vector<uint32_t> code_;       // outcodes per vertex, 5 bits per face
   std::vector<float> sx_[5], sy_[5]; // pixel x, y on each hemicube face
