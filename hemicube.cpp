@@ -307,10 +307,12 @@ void Hemicube::BuildCache(const Mesh& mesh) {
 }
 
 // Median split along the box's longest axis, down to a few faces a node:
-// a face's own test is as cheap as a node's.
+// a face's own test is as cheap as a node's, and a leaf of 8 small faces
+// costs fewer node tests than it draws in vain (a tessellated scene: about
+// 8% less time than 4 a leaf, 16 no better).
 int Hemicube::BuildNodes(const std::vector<CacheFace>& faces, std::vector<int>* order,
                          int first, int count) {
-  constexpr int kLeafFaces = 4;
+  constexpr int kLeafFaces = 8;
   const int at = int(nodes_.size());
   nodes_.emplace_back();
   Node nd;
@@ -613,6 +615,10 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       const uint32_t mask = Visible(nd.lo, nd.hi);
       if (!mask) continue;
       if (nd.right < 0) {
+        // The faces' vertices lie in mesh order, not the hierarchy's: ask
+        // for all of them at once rather than wait for each face's in turn.
+        for (int i = nd.first; i < nd.first + nd.count; ++i)
+          for (int v = faces_[i].vb; v < faces_[i].ve; v += 2) __builtin_prefetch(&mesh.verts[v]);
         for (int i = nd.first; i < nd.first + nd.count; ++i) draw(i, mask);
         continue;
       }
