@@ -374,6 +374,37 @@ bool Hemicube::Open(int h, int xa, int xb, int ra, int rb, float zt) {
   return false;
 }
 
+// Whether a large leaf (pixel bounding box of kHiddenArea or more) lies
+// wholly behind what face h holds: its nearest depth over that box (the
+// plane's at a corner, in double, raised well past Scan's float rounding)
+// against the tiles, as Visible tests boxes. Small leaves are drawn
+// straight away: the test would cost what drawing them does. A hidden
+// leaf could not win a pixel, so skipping it leaves the buffer as it is.
+bool Hemicube::Hidden(int h, const float (*pt)[2], int n, float za, float zb, float zc) {
+  constexpr double kHiddenArea = 64;
+  float x0 = pt[0][0], x1 = x0, y0 = pt[0][1], y1 = y0;
+  for (int i = 1; i < n; ++i) {
+    x0 = std::min(x0, pt[i][0]);
+    x1 = std::max(x1, pt[i][0]);
+    y0 = std::min(y0, pt[i][1]);
+    y1 = std::max(y1, pt[i][1]);
+  }
+  const int R = res_, H = h == 0 ? R : R / 2;
+  if (!(double(x1 - x0) * double(y1 - y0) >= kHiddenArea)) return false;
+  const int xa = std::max(0, int(std::floor(std::max(x0, -2.0f))) - 1);
+  const int xb = std::min(R, int(std::ceil(std::min(x1, R + 2.0f))) + 1);
+  const int ra = std::max(0, int(std::floor(std::max(y0, -2.0f))) - 1);
+  const int rb = std::min(H, int(std::ceil(std::min(y1, H + 2.0f))) + 1);
+  if (xa >= xb || ra >= rb) return false;  // Scan finds nothing to draw as cheaply
+  // Scan's z at pixel (x, y) is za (x + 1/2) + zb (y + 1/2) + zc in float.
+  const double a = za, b = zb, c = zc;
+  const double X0 = xa, X1 = xb, Y0 = ra, Y1 = rb;
+  const double zmax = std::max(std::max(a * X0 + b * Y0, a * X1 + b * Y0),
+                               std::max(a * X0 + b * Y1, a * X1 + b * Y1)) + c;
+  const double slack = 1e-4 * (std::abs(a) * X1 + std::abs(b) * Y1 + std::abs(c));
+  return !Open(h, xa, xb, ra, rb, float(zmax + slack));
+}
+
 uint32_t Hemicube::Visible(const glm::dvec3& lo, const glm::dvec3& hi) {
   // The box in the shooter's frame, as a box again (it only grows), and by
   // a margin far above float rounding of the vertices: whatever is decided
@@ -506,7 +537,7 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
           pt[i][0] = sx_[h][vid[i]];
           pt[i][1] = sy_[h][vid[i]];
         }
-        Scan(h, pt, n, za[h], zb[h], zc[h], r);
+        if (!culling_ || !Hidden(h, pt, n, za[h], zb[h], zc[h])) Scan(h, pt, n, za[h], zb[h], zc[h], r);
         continue;
       }
       // Crosses the near plane: clip in this face's frame, then project.

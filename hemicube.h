@@ -16,7 +16,8 @@
 // Cost: faces are reached through a bounding-volume hierarchy, front to
 // back; a node or face is skipped whole when it lies behind the shooter,
 // outside every hemicube face, or behind the depths already drawn (a
-// kTile-pixel tile's least depth, then pixels). So a column costs about
+// kTile-pixel tile's least depth, then pixels); so is a leaf that covers
+// 64 pixels or more, before it is scanned. So a column costs about
 // its visible faces and its pixels, not the scene: the maze or a room of
 // boxes leaves most of its elements unread. The item buffer holds leaf
 // ranks (their order in the flat copy), which break depth ties as the
@@ -60,7 +61,8 @@ class Hemicube {
   // Culling on (the default): faces are visited front to back through a
   // bounding-volume hierarchy and skipped, with their elements unread,
   // where they lie wholly behind the shooter, outside a hemicube face or
-  // behind what that face's item buffer already holds. Off: every
+  // behind what that face's item buffer already holds (and so are large
+  // leaves, one by one). Off: every
   // front-facing face on every hemicube face, in face order, as a plain
   // z-buffer would. The columns are the same either way (the tests compare
   // them): culled faces could not have won a pixel, and depth ties go to
@@ -107,6 +109,7 @@ class Hemicube {
   // wholly behind the shooter, outside the face or behind its buffer.
   uint32_t Visible(const glm::dvec3& lo, const glm::dvec3& hi);
   bool Open(int h, int xa, int xb, int ra, int rb, float zt);
+  bool Hidden(int h, const float (*pt)[2], int n, float za, float zb, float zc);
   // Its vertices into the shooter's frame, its leaves into the buffers of
   // the hemicube faces in `mask`; adds to clock's stages when non-null.
   void DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock);
