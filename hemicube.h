@@ -62,9 +62,8 @@ class Hemicube {
   // bounding-volume hierarchy and skipped, with their elements unread,
   // where they lie wholly behind the shooter, outside a hemicube face or
   // behind what that face's item buffer already holds (and so are large
-  // leaves, one by one). Off: every
-  // front-facing face on every hemicube face, in face order, as a plain
-  // z-buffer would. The columns are the same either way (the tests compare
+  // leaves, one by one). Off: every front-facing face on every hemicube
+  // face, in face order, as a plain z-buffer would. The columns are the same either way (the tests compare
   // them): culled faces could not have won a pixel, and depth ties go to
   // the element drawn first in face order whatever order they are drawn in.
   void set_culling(bool on) { culling_ = on; }
