@@ -14,6 +14,11 @@ namespace {
 
 int Corners(const Element& e) { return e.IsTriangle() ? 3 : 4; }
 
+// Element e's corner after k: a compare, not a division by 3 or 4 (these
+// run per edge of every edge-list walk).
+int NextCorner(const Element& e, int k) { return k + 1 < Corners(e) ? k + 1 : 0; }
+int Next(int k, int n) { return k + 1 < n ? k + 1 : 0; }
+
 uint64_t Undirected(int a, int b) { return a < b ? EdgeKey(a, b) : EdgeKey(b, a); }
 
 int32_t Slot(int elem, int k) { return int32_t(elem) * 4 + k; }
@@ -24,7 +29,7 @@ int32_t Slot(int elem, int k) { return int32_t(elem) * 4 + k; }
 int EdgeElement(const Mesh& m, int a, int b, int* k) {
   for (int32_t s = m.out_head[a]; s >= 0; s = m.out_next[s]) {
     const Element& e = m.elems[s >> 2];
-    if (e.v[((s & 3) + 1) % Corners(e)] == b) {
+    if (e.v[NextCorner(e, s & 3)] == b) {
       *k = s & 3;
       return s >> 2;
     }
@@ -60,7 +65,7 @@ size_t SegmentHash(const glm::dvec3& p, const glm::dvec3& q) {
 size_t SlotHash(const Mesh& m, int32_t s) {
   const Element& e = m.elems[s >> 2];
   const int k = s & 3;
-  return SegmentHash(m.verts[e.v[k]], m.verts[e.v[(k + 1) % Corners(e)]]);
+  return SegmentHash(m.verts[e.v[k]], m.verts[e.v[NextCorner(e, k)]]);
 }
 
 void BorderPut(std::vector<int32_t>* table, const Mesh& m, int32_t s) {
@@ -80,12 +85,6 @@ void BorderReserve(Mesh* m, size_t more) {
   for (int32_t x : m->border)
     if (x >= 0) BorderPut(&grown, *m, x);
   m->border.swap(grown);
-}
-
-void BorderAdd(Mesh* m, int32_t s) {
-  BorderReserve(m, 1);
-  BorderPut(&m->border, *m, s);
-  ++m->border_count;
 }
 
 // Takes slot s out, moving later entries of its probe run back (no
@@ -119,7 +118,7 @@ void BorderFind(const Mesh& m, const glm::dvec3& p, const glm::dvec3& q, std::ve
     const int32_t s = m.border[i];
     const Element& e = m.elems[s >> 2];
     const glm::dvec3& a = m.verts[e.v[s & 3]];
-    const glm::dvec3& b = m.verts[e.v[((s & 3) + 1) % Corners(e)]];
+    const glm::dvec3& b = m.verts[e.v[NextCorner(e, s & 3)]];
     if ((a == p && b == q) || (a == q && b == p)) out->push_back(s >> 2);
   }
   std::sort(out->begin(), out->end());
@@ -131,12 +130,14 @@ void BorderFind(const Mesh& m, const glm::dvec3& p, const glm::dvec3& q, std::ve
 void Border(Mesh* m, int elem, bool add) {
   const Element& e = m->elems[elem];
   uint8_t& bits = m->border_bits[elem];
+  if (add) BorderReserve(m, Corners(e));  // once, not per edge added
   for (int k = 0, n = Corners(e); k < n; ++k) {
     if (!add) {
       if (bits >> k & 1) BorderRemove(m, Slot(elem, k));
-    } else if (Owner(*m, e.v[(k + 1) % n], e.v[k]) < 0) {
+    } else if (Owner(*m, e.v[Next(k, n)], e.v[k]) < 0) {
       bits |= uint8_t(1 << k);
-      BorderAdd(m, Slot(elem, k));
+      BorderPut(&m->border, *m, Slot(elem, k));
+      ++m->border_count;
     }
   }
   if (!add) bits = 0;
@@ -145,7 +146,7 @@ void Border(Mesh* m, int elem, bool add) {
 // Element n's edge (p, q) (its own vertex ids) becomes home to T-vertex v.
 void SetMid(Element* n, int p, int q, int v) {
   for (int k = 0, c = Corners(*n); k < c; ++k)
-    if (n->v[k] == p && n->v[(k + 1) % c] == q) n->mid[k] = v;
+    if (n->v[k] == p && n->v[Next(k, c)] == q) n->mid[k] = v;
 }
 
 // A vertex Divide() makes: on an edge (a, b), or a quad's centre (a < 0).
@@ -179,7 +180,7 @@ int Midpoint(Mesh* m, int face, int a, int b) {
     const int nf = m->patches[ne.patch].face;
     if (nf == face || !ne.IsLeaf()) continue;
     for (int k = 0, c = Corners(ne); k < c; ++k) {
-      const int x = ne.v[k], y = ne.v[(k + 1) % c];
+      const int x = ne.v[k], y = ne.v[Next(k, c)];
       const glm::dvec3 px = m->verts[x], py = m->verts[y];
       if (ne.mid[k] >= 0 || !((px == pa && py == pb) || (px == pb && py == pa))) continue;
       ne.mid[k] = AddVertex(m, nf, x, y, p);
@@ -226,7 +227,7 @@ void ConnectEdges(Mesh* mesh) {
   for (size_t e = 0; e < mesh->elems.size(); ++e) {
     const Element& el = mesh->elems[e];
     for (int k = 0, n = Corners(el); k < n && el.IsLeaf(); ++k)
-      if (Owner(*mesh, el.v[(k + 1) % n], el.v[k]) < 0) {
+      if (Owner(*mesh, el.v[Next(k, n)], el.v[k]) < 0) {
         mesh->border_bits[e] |= uint8_t(1 << k);
         border.push_back(Slot(int(e), k));
       }
@@ -251,7 +252,7 @@ void Divide(Mesh* mesh, int32_t elem) {
   const int face = mesh->patches[parent.patch].face;
   const int n = Corners(parent);
   int mid[4];
-  for (int k = 0; k < n; ++k) mid[k] = Midpoint(mesh, face, parent.v[k], parent.v[(k + 1) % n]);
+  for (int k = 0; k < n; ++k) mid[k] = Midpoint(mesh, face, parent.v[k], parent.v[Next(k, n)]);
   const std::array<int, 4>& v = parent.v;
   std::array<std::array<int, 4>, kChildren> kids;
   if (n == 3) {
@@ -267,7 +268,9 @@ void Divide(Mesh* mesh, int32_t elem) {
   ++mesh->divided;
   const int first = int(mesh->elems.size());
   mesh->elems[elem].first_child = first;
-  for (const auto& kv : kids) {
+  for (int c = 0; c < kChildren; ++c) {
+    const std::array<int, 4>& kv = kids[c];
+    CHECK(c >= n || kv[c] == v[c]);
     Element child;
     child.v = kv;
     child.patch = parent.patch;
@@ -276,7 +279,12 @@ void Divide(Mesh* mesh, int32_t elem) {
     child.area = ElementArea(*mesh, child);
     // A neighbour already finer than the parent by two levels leaves a
     // T-vertex on the child's edge (the subdivision policy avoids it).
-    for (int k = 0; k < n; ++k) child.mid[k] = MidpointOf(*mesh, kv[k], kv[(k + 1) % n]);
+    // Only on the parent's outline: child c < n has parent corner c at its
+    // corner c (as kids lays them out), so its edges c - 1 and c; the
+    // others lie inside the parent (on its new centre, or between two of
+    // its sides' midpoints), where nothing but the children has an edge.
+    for (int k = 0; k < n; ++k)
+      if (c < n && (k == c || Next(k, n) == c)) child.mid[k] = MidpointOf(*mesh, kv[k], kv[Next(k, n)]);
     mesh->elems.push_back(child);
     Link(mesh, int(mesh->elems.size()) - 1);
   }
@@ -305,7 +313,7 @@ void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out) {
     return n >= 0;
   };
   for (int k = 0, c = Corners(e); k < c; ++k) {
-    const int p = e.v[k], q = e.v[(k + 1) % c];
+    const int p = e.v[k], q = e.v[Next(k, c)];
     if (add(q, p)) continue;               // alike
     if (e.mid[k] >= 0) {                   // finer, across a T-vertex
       add(q, e.mid[k]);

@@ -16,7 +16,8 @@
 // Cost: faces are reached through a bounding-volume hierarchy, front to
 // back; a node or face is skipped whole when it lies behind the shooter,
 // outside every hemicube face, or behind the depths already drawn (a
-// kTile-pixel tile's least depth, then pixels). So a column costs about
+// kTile-pixel tile's least depth, then pixels); so is a leaf that covers
+// 64 pixels or more, before it is scanned. So a column costs about
 // its visible faces and its pixels, not the scene: the maze or a room of
 // boxes leaves most of its elements unread. The item buffer holds leaf
 // ranks (their order in the flat copy), which break depth ties as the
@@ -60,9 +61,9 @@ class Hemicube {
   // Culling on (the default): faces are visited front to back through a
   // bounding-volume hierarchy and skipped, with their elements unread,
   // where they lie wholly behind the shooter, outside a hemicube face or
-  // behind what that face's item buffer already holds. Off: every
-  // front-facing face on every hemicube face, in face order, as a plain
-  // z-buffer would. The columns are the same either way (the tests compare
+  // behind what that face's item buffer already holds (and so are large
+  // leaves, one by one). Off: every front-facing face on every hemicube
+  // face, in face order, as a plain z-buffer would. The columns are the same either way (the tests compare
   // them): culled faces could not have won a pixel, and depth ties go to
   // the element drawn first in face order whatever order they are drawn in.
   void set_culling(bool on) { culling_ = on; }
@@ -107,6 +108,7 @@ class Hemicube {
   // wholly behind the shooter, outside the face or behind its buffer.
   uint32_t Visible(const glm::dvec3& lo, const glm::dvec3& hi);
   bool Open(int h, int xa, int xb, int ra, int rb, float zt);
+  bool Hidden(int h, const float (*pt)[2], int n, float za, float zb, float zc);
   // Its vertices into the shooter's frame, its leaves into the buffers of
   // the hemicube faces in `mask`; adds to clock's stages when non-null.
   void DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock);
@@ -125,6 +127,9 @@ class Hemicube {
   static constexpr int kTile = 8;
   std::vector<float> tile_min_;
   std::vector<uint8_t> dirty_;
+  // Per hemicube face, the rows [first, last) Scan wrote since the last
+  // readback, which reads and clears only those.
+  int rows_[5][2] = {{INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}};
 
   Key key_;
   // Faces with leaves in the hierarchy's order, and their outlines in that
@@ -143,6 +148,7 @@ class Hemicube {
   float near_ = 0;
   double coplanar_ = 0, margin_ = 0;
   int32_t self_ = -1;                // the shooter's group (its members are skipped), or -1
+  std::vector<int> self_faces_;      // the mesh faces of its members, sorted
   std::vector<float> lx_, ly_, lz_;  // face vertices in the shooter frame
   std::vector<uint32_t> code_;       // outcodes per vertex, 5 bits per face
   std::vector<float> sx_[5], sy_[5]; // pixel x, y on each hemicube face

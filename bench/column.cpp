@@ -1,7 +1,7 @@
 // radiosity-column: the form-factor column alone, at any scene size, as
 // one table row on stdout (bench/column.sh adds the headers and runs it
 // for the program before and after a change, side by side).
-//   radiosity-column SCENE.obj R COLUMNS [PATCH_SIZE [ELEMENTS_PER_PATCH]]
+//   radiosity-column SCENE.obj R COLUMNS [PATCH_SIZE [ELEMENTS_PER_PATCH [JOIN]]]
 // COLUMNS shooters spread evenly over the patches; per column: CPU time,
 // split into the stages in the proportions ColumnStats measures, the cost
 // model (15 ns/element + 70 ns/covered element + 3 ns/pixel) and how many
@@ -22,7 +22,7 @@
 int main(int argc, char** argv) {
   if (argc < 4) {
     std::fprintf(stderr,
-                 "usage: radiosity-column SCENE.obj R COLUMNS [PATCH_SIZE [ELEMENTS_PER_PATCH]]\n");
+                 "usage: radiosity-column SCENE.obj R COLUMNS [PATCH_SIZE [ELEMENTS_PER_PATCH [JOIN]]]\n");
     return 2;
   }
   Scene scene;
@@ -35,6 +35,9 @@ int main(int argc, char** argv) {
   MeshOptions mo;
   if (argc > 4) mo.patch_size = std::atof(argv[4]);
   if (argc > 5) mo.elements_per_patch = std::atoi(argv[5]);
+  // JOIN 0: a tessellated scene's faces stay apart (--no-join), so that
+  // the column sees a finely cut mesh rather than its joined surfaces.
+  if (argc > 6) mo.join = std::atoi(argv[6]) != 0;
   Mesh mesh;
   if (!BuildMesh(scene, mo, &mesh, &err)) {
     std::fprintf(stderr, "radiosity-column: %s\n", err.c_str());
