@@ -70,7 +70,7 @@ Checkpoint Filled() {
   c.options.seed = 7;
   c.options.mesh.patch_size = 0.25;
   c.options.sub.max_level = 3;
-  c.edits = {4, 0, 13};
+  c.edits = {4, 0, 13, ~1};
   c.solver.b = {glm::dvec3(1, 2, 3), glm::dvec3(-0.0, 1e-300, 4.5)};
   c.solver.unshot = {glm::dvec3(0.5), glm::dvec3(0.25), glm::dvec3(0)};
   c.solver.lit = {1, 0, 1};
@@ -87,6 +87,8 @@ Checkpoint Filled() {
   c.subdivider.quiet = true;
   c.subdivider.passes = 2;
   c.subdivider.seconds = 0.01;
+  c.subdivider.split_threshold = 0.4;
+  c.subdivider.splits = 1;
   c.run.wave = 2;
   c.run.wave_start = 30;
   c.run.best = HUGE_VAL;
@@ -135,14 +137,15 @@ TEST(Checkpoint, RoundTrip) {
   EXPECT_EQ(CompareOptions(a.options, b.options), "");
 }
 
-// Format 2 (format 1 plus the two group options, 9 bytes) pinned byte for
-// byte (the trailing SHA-256 covers every byte before it), and the scene
-// and mesh hashes a checkpoint is checked against are those format 1 had.
-TEST(Checkpoint, BytesAndHashesAreThoseOfFormat2) {
+// Format 3 (format 2 plus the three shooter-division options, 17 bytes,
+// and its state, 16) pinned byte for byte (the trailing SHA-256 covers
+// every byte before it), and the scene and mesh hashes a checkpoint is
+// checked against are those format 1 had.
+TEST(Checkpoint, BytesAndHashesAreThoseOfFormat3) {
   const std::string bytes = EncodeCheckpoint(Filled());
-  EXPECT_EQ(bytes.size(), 606u);
+  EXPECT_EQ(bytes.size(), 643u);
   EXPECT_EQ(Hex(bytes.substr(bytes.size() - 32)),
-            "f34bc114ccc9c4502115856a566fbd5ac58a7c98a636aa169b21ad012384f5b4");
+            "f5422a12c3e5935d9ff3b52397a03a5ae5f90dc1f546d113362f61d9292c04cd");
   EXPECT_EQ(Hex(SceneHash(ShadowScene())),
             "e5ded178170e67915e7e2c974f2f76313e56922c54aa9ce557da0635a7ee8021");
   EXPECT_EQ(MeshHash(MakeMesh(ShadowScene(), ShadowMesh())), 0x4305479c346ad8daull);
@@ -182,7 +185,7 @@ TEST(Checkpoint, ForeignAndOtherVersionsAreRefused) {
   EXPECT_EQ(Error(""), "not a radiosity checkpoint (no RADCKPT magic)");
   std::string v1 = EncodeCheckpoint(Filled());
   v1[8] = 1;
-  EXPECT_EQ(Error(v1), "checkpoint format version 1, this radiosity reads 2");
+  EXPECT_EQ(Error(v1), "checkpoint format version 1, this radiosity reads 3");
 }
 
 // An edited checkpoint, re-hashed so that its checksum holds: values no
@@ -307,7 +310,7 @@ TEST(Checkpoint, DivideHistoryReplaysToTheSameMesh) {
   Mesh bad = built;
   EXPECT_FALSE(ReplayDivisions(&bad, {2, 2}, &err));
   EXPECT_EQ(err, "division 2 of 2 names element 2, which is not a leaf of the mesh");
-  EXPECT_FALSE(ReplayDivisions(&bad, {-1}, &err));
+  EXPECT_FALSE(ReplayDivisions(&bad, {~int32_t(built.patches.size())}, &err));
 }
 
 TEST(Checkpoint, IdentityRefusesAnotherSceneAndOtherOptions) {

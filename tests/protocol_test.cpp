@@ -157,7 +157,7 @@ TEST(Protocol, HelloRoundTrips) {
     std::string frame;
     proto::EncodeHello(h, &frame);
     const std::string p = PayloadOf(frame, Msg::kHello);
-    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x03\x00", 6));  // magic, version
+    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x04\x00", 6));  // magic, version
     proto::Hello d;
     d.magic = 0;
     d.version = 0;
@@ -168,7 +168,7 @@ TEST(Protocol, HelloRoundTrips) {
     EXPECT_EQ(d.build, b);
   }
   // A build string longer than 256 bytes or not printable is refused.
-  std::string p = "RADW" + std::string("\x03\x00", 2);
+  std::string p = "RADW" + std::string("\x04\x00", 2);
   std::string long_build = p;
   WVar(&long_build, 257);
   long_build += std::string(257, 'x');
@@ -383,7 +383,8 @@ TEST(Protocol, WorkRoundTrips) {
 
 TEST(Protocol, DivideRoundTripsInOrder) {
   for (const auto& v : {std::vector<int32_t>{}, std::vector<int32_t>{0},
-                        std::vector<int32_t>{900, 3, 17, 2000000, 4, INT32_MAX}}) {
+                        std::vector<int32_t>{900, 3, 17, 2000000, 4, INT32_MAX},
+                        std::vector<int32_t>{~0, 5, ~INT32_MAX, ~7}}) {  // ~p: splits
     std::string frame;
     proto::EncodeDivide(v, &frame);
     std::vector<int32_t> d = {42};
@@ -394,7 +395,7 @@ TEST(Protocol, DivideRoundTripsInOrder) {
   std::string p, err;
   WVar(&p, 2);
   WVar(&p, 5);
-  WVar(&p, 1ull << 31);
+  WVar(&p, 1ull << 32);  // edits are 2e or 2p + 1 below 2^32
   std::vector<int32_t> d;
   EXPECT_FALSE(proto::DecodeDivide(p, &d, &err));
   EXPECT_FALSE(err.empty());
