@@ -497,7 +497,7 @@ std::string CompareOptions(const SolveOptions& a, const SolveOptions& b) {
   if (a.sub.waves != b.sub.waves) return flag("--no-waves", !a.sub.waves, !b.sub.waves);
   if (a.sub.wave_fraction != b.sub.wave_fraction)
     return differ("--wave-fraction", num(a.sub.wave_fraction), num(b.sub.wave_fraction));
-  if (a.sub.split != b.sub.split) return flag("--no-split", !a.sub.split, !b.sub.split);
+  if (a.sub.split != b.sub.split) return flag("--split", a.sub.split, b.sub.split);
   if (a.sub.split && a.sub.split_floor != b.sub.split_floor)
     return differ("--split-floor", num(a.sub.split_floor), num(b.sub.split_floor));
   if (a.sub.split_threshold != b.sub.split_threshold || a.sub.threshold != b.sub.threshold ||

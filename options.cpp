@@ -122,9 +122,10 @@ const char kUsage[] =
     "      --min-element L    smallest element edge made by dividing (default: diagonal / 400)\n"
     "      --max-level N      deepest division below the built elements, 0..12 (default 2)\n"
     "      --wave-fraction F  a new wave after F of the elements divided (default 0.2)\n"
-    "      --no-split         never split a shooter patch (default: split patches whose\n"
-    "                         pieces differ strongly in radiosity)\n"
-    "      --split-floor F    lowest shooter-division threshold (default 0.5)\n"
+    "      --split            split shooter patches whose pieces differ strongly in\n"
+    "                         radiosity (default: patches stay as built)\n"
+    "      --split-floor F    lowest shooter-division threshold, implies --split\n"
+    "                         (default 0.5)\n"
     "      --no-rotate        keep the hemicube aligned (default: turned per shot)\n"
     "      --seed N           seed of the hemicube turns (default 1)\n"
     "      --log-every N      shots between log.csv rows (default: patches / 100)\n"
@@ -150,7 +151,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
     kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
     kNoJoin, kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
     kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect, kConverge,
-    kCheckpoint, kCheckpointEvery, kResume, kNoGroups, kGroupSize, kNoSplit, kSplitFloor,
+    kCheckpoint, kCheckpointEvery, kResume, kNoGroups, kGroupSize, kSplit, kSplitFloor,
   };
   static const option kLong[] = {
       {"out", required_argument, nullptr, 'o'},
@@ -180,7 +181,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       {"no-subdivide", no_argument, nullptr, kNoSubdivide},
       {"no-waves", no_argument, nullptr, kNoWaves},
       {"subdivide-floor", required_argument, nullptr, kFloor},
-      {"no-split", no_argument, nullptr, kNoSplit},
+      {"split", no_argument, nullptr, kSplit},
       {"split-floor", required_argument, nullptr, kSplitFloor},
       {"min-element", required_argument, nullptr, kMinElement},
       {"max-level", required_argument, nullptr, kMaxLevel},
@@ -205,7 +206,6 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   bool epsilon_given = false, worker_mode = false, workers_given = false, dump_hosts = false;
   // Given on the command line: options that contradict others.
   bool quiet = false, verbose = false, no_subdivide = false, no_waves = false;
-  bool no_split = false, split_floor = false;
   bool wave_fraction = false;
   std::string subdivide_limit;  // the last of --subdivide-floor, --min-element, --max-level, --split-floor
   std::string& secret_file = o.secret_file;
@@ -269,10 +269,10 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
         ok = Number("--subdivide-floor", optarg, 1e-3, 100, &o.sub.floor, err);
         subdivide_limit = "--subdivide-floor";
         break;
-      case kNoSplit: o.sub.split = false; no_split = true; break;
+      case kSplit: o.sub.split = true; break;
       case kSplitFloor:
         ok = Number("--split-floor", optarg, 1e-3, 100, &o.sub.split_floor, err);
-        split_floor = true;
+        o.sub.split = true;
         subdivide_limit = "--split-floor";
         break;
       case kMinElement:
@@ -320,8 +320,6 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   if (quiet && verbose) clash = "-q and -v contradict each other";
   else if (no_subdivide && !subdivide_limit.empty())
     clash = subdivide_limit + " limits dividing, and --no-subdivide divides nothing";
-  else if (no_split && split_floor)
-    clash = "--split-floor limits splitting, and --no-split splits nothing";
   else if (wave_fraction && (no_subdivide || no_waves))
     clash = "--wave-fraction starts waves, and " +
             std::string(no_subdivide ? "--no-subdivide" : "--no-waves") + " has none";

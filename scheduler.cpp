@@ -27,7 +27,9 @@ bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wa
   solver->Divided(*edits);
   // Shooter division: a split of patch p travels as the edit ~p, after
   // the pass's divisions (doc/protocol.txt, divide).
-  for (int32_t p : subdivider->SplitPass(*mesh, solver->radiosity(), solver->Ambient(), *changed)) {
+  const std::vector<int32_t> splits =
+      subdivider->SplitPass(*mesh, solver->radiosity(), solver->Ambient(), *changed, *edits);
+  for (int32_t p : splits) {
     SplitPatch(mesh, p);
     solver->Split(p);
     edits->push_back(~p);

@@ -276,20 +276,22 @@ void Subdivider::Spread(const Mesh& mesh, const std::vector<glm::dvec3>& b, int 
 
 std::vector<int32_t> Subdivider::SplitPass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
                                            const glm::dvec3& ambient,
-                                           const std::vector<int32_t>& changed) {
+                                           const std::vector<int32_t>& changed,
+                                           const std::vector<int32_t>& divided) {
   std::vector<int32_t> out;
   if (!opts_.split) return out;
   const size_t n = mesh.patches.size();
   // Measured again: every patch at a wave's first pass, new ones, split
-  // ones and those a changed leaf belongs to.
+  // ones and those a changed or divided element belongs to.
   hi_.resize(n, 0);
   lo_.resize(n, 1);
-  for (int32_t e : changed)
-    if (size_t(e) < mesh.elems.size()) {
-      const int p = mesh.elems[size_t(e)].patch;
-      hi_[size_t(p)] = 0;
-      lo_[size_t(p)] = 1;
-    }
+  for (const std::vector<int32_t>* list : {&changed, &divided})
+    for (int32_t e : *list)
+      if (size_t(e) < mesh.elems.size()) {
+        const int p = mesh.elems[size_t(e)].patch;
+        hi_[size_t(p)] = 0;
+        lo_[size_t(p)] = 1;
+      }
   for (size_t p = 0; p < n; ++p) {
     if (lo_[p] > hi_[p]) Spread(mesh, b, int(p));
     if (!(hi_[p] > lo_[p])) continue;

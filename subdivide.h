@@ -51,7 +51,7 @@ struct SubdivideOptions {
   double wave_fraction = 0.2;  // of the wave's starting elements divided
   long between = 10;       // shots between passes (at least 10)
   double quiet = 0.002;    // a pass dividing under this fraction of the leaves is quiet
-  bool split = true;            // shooter division (SplitPass)
+  bool split = false;           // shooter division (SplitPass): --split
   double split_threshold = 0.6; // the spread a patch must exceed, at first
   double split_floor = 0.5;     // ... lowered by `decay` every pass down to this
   // Elements (mesh.elems, divided ones included) a pass may not go past:
@@ -106,12 +106,16 @@ class Subdivider {
   // The patches to split after the pass just made (call it after Pass and
   // after the divisions are applied and shared, Solver::Divided), in
   // increasing id: those whose spread exceeds the split threshold
-  // (above). Only patches with a leaf in `changed` (as given to Pass), new
-  // ones and those split last time are measured again; the others keep
-  // their pieces' radiosity from then, under the scale of now. Lowers the
-  // split threshold. Empty without opts.split.
+  // (above). Only patches with an element in `changed` (as given to Pass)
+  // or `divided` (what it returned), new ones and those split last time
+  // are measured again; the others keep their pieces' radiosity from
+  // then, which is theirs now (their radiosity did not change), under the
+  // scale of now: so the result is that of measuring every patch, and a
+  // resumed run, which measures all at its first pass, splits alike.
+  // Lowers the split threshold. Empty without opts.split.
   std::vector<int32_t> SplitPass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
-                                 const glm::dvec3& ambient, const std::vector<int32_t>& changed);
+                                 const glm::dvec3& ambient, const std::vector<int32_t>& changed,
+                                 const std::vector<int32_t>& divided);
   long splits() const { return splits_; }
 
   // Leaves whose factor the last pass computed.

@@ -145,7 +145,7 @@ TEST(Checkpoint, BytesAndHashesAreThoseOfFormat3) {
   const std::string bytes = EncodeCheckpoint(Filled());
   EXPECT_EQ(bytes.size(), 643u);
   EXPECT_EQ(Hex(bytes.substr(bytes.size() - 32)),
-            "f5422a12c3e5935d9ff3b52397a03a5ae5f90dc1f546d113362f61d9292c04cd");
+            "bc3d0db226d53ea094d0254b80c7806e58cce1471c9380c8eb7168f6cd0ab12f");
   EXPECT_EQ(Hex(SceneHash(ShadowScene())),
             "e5ded178170e67915e7e2c974f2f76313e56922c54aa9ce557da0635a7ee8021");
   EXPECT_EQ(MeshHash(MakeMesh(ShadowScene(), ShadowMesh())), 0x4305479c346ad8daull);

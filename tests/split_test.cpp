@@ -151,6 +151,7 @@ TEST(Split, SolverKeepsTheUnshotPower) {
 TEST(Split, PolicySplitsUnevenPatchesOnly) {
   Mesh m = MakeMesh(Floor(), Coarse());
   SubdivideOptions so;
+  so.split = true;
   Subdivider sub(&m, so);
   std::vector<glm::dvec3> b(m.elems.size(), glm::dvec3(1.0));
   b[size_t(m.patches[2].elements[0])] = glm::dvec3(0.2);  // patch 2: one dark piece
@@ -158,18 +159,18 @@ TEST(Split, PolicySplitsUnevenPatchesOnly) {
   for (int p : m.faces[1].patches)  // the light: uneven, never split
     b[size_t(m.patches[p].elements[0])] = glm::dvec3(0.0);
   sub.Pass(m, b, glm::dvec3(0.0), 100, {});
-  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {}), (std::vector<int32_t>{2}));
+  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {}, {}), (std::vector<int32_t>{2}));
   SplitPatch(&m, 2);  // into pieces of one leaf each: none splits again
   // Measured again only where a leaf changed: patch 1, now darker there.
   b[size_t(m.patches[1].elements[3])] = glm::dvec3(0.3);
-  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {}), (std::vector<int32_t>{}));
-  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {m.patches[1].elements[3]}),
+  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {}, {}), (std::vector<int32_t>{}));
+  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {m.patches[1].elements[3]}, {}),
             (std::vector<int32_t>{1}));
   EXPECT_EQ(sub.splits(), 2);
   EXPECT_EQ(sub.State().split_threshold, so.split_floor);  // 0.6 · 0.7 < 0.5
   so.split = false;
   Subdivider off(&m, so);
-  EXPECT_TRUE(off.SplitPass(m, b, glm::dvec3(0.0), {}).empty());
+  EXPECT_TRUE(off.SplitPass(m, b, glm::dvec3(0.0), {}, {}).empty());
 }
 
 // A furnace splits nothing, through a whole run with its division passes.
@@ -180,7 +181,9 @@ TEST(Split, FurnaceSplitsNothing) {
   Mesh m = MakeMesh(s, mo);
   const size_t built = m.patches.size();
   Solver solver(m, true);
-  Subdivider sub(&m, SubdivideOptions());
+  SubdivideOptions so;
+  so.split = true;
+  Subdivider sub(&m, so);
   RunOptions ro;
   ro.resolution = 128;
   ro.epsilon = 1e-4;

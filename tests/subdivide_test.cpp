@@ -388,7 +388,6 @@ TEST(Subdivider, IncrementalPassesDivideAsEvaluatingEveryLeaf) {
       m[i] = MakeMesh(scene, mo);
       SubdivideOptions so;
       so.incremental = i == 0;
-      so.split = false;  // element division's passes alone (a split ends waves sooner)
       Subdivider sub(&m[i], so);
       Solver solver(m[i], over);
       RunOptions o;
