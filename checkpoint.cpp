@@ -87,6 +87,9 @@ void PutOptions(std::string* w, const SolveOptions& o) {
   PutF64(w, o.sub.wave_fraction);
   PutFixed64(w, o.sub.between);
   PutF64(w, o.sub.quiet);
+  PutU8(w, o.sub.split);
+  PutF64(w, o.sub.split_threshold);
+  PutF64(w, o.sub.split_floor);
 }
 
 SolveOptions GetOptions(In* r) {
@@ -110,6 +113,9 @@ SolveOptions GetOptions(In* r) {
   o.sub.wave_fraction = r->F64();
   o.sub.between = long(r->I64());
   o.sub.quiet = r->F64();
+  o.sub.split = r->Bool();
+  o.sub.split_threshold = r->F64();
+  o.sub.split_floor = r->F64();
   return o;
 }
 
@@ -128,7 +134,7 @@ std::string Implausible(const Checkpoint& k) {
   };
   const SolverState& s = k.solver;
   if (k.elements > uint64_t(kMaxElements) || k.base_elements > k.elements ||
-      k.patches > k.base_elements || k.edits.size() > k.elements)
+      k.patches > k.elements || k.edits.size() > k.elements + k.patches)
     return "element and patch counts out of range";
   if (s.b.size() != k.elements || s.unshot.size() != k.patches || s.lit.size() != k.patches ||
       s.blind.size() != k.patches || s.times_shot.size() != k.patches)
@@ -161,7 +167,8 @@ std::string Implausible(const Checkpoint& k) {
     const SubdividerState& d = k.subdivider;
     if (!std::isfinite(d.threshold) || d.threshold <= 0 || d.last_pass < -1 ||
         d.last_pass > s.shots || d.wave_start_leaves < 0 || d.divided_in_wave < 0 ||
-        d.passes < 0 || !std::isfinite(d.seconds) || d.seconds < 0)
+        d.passes < 0 || !std::isfinite(d.seconds) || d.seconds < 0 ||
+        !std::isfinite(d.split_threshold) || d.split_threshold <= 0 || d.splits < 0)
       return "subdivision state out of range";
   }
   // log.csv's rows as LogCsv writes them: numbers, commas, newlines
@@ -215,13 +222,24 @@ std::vector<int32_t> DivideHistory(const Mesh& mesh) {
   std::sort(edits.begin(), edits.end(), [&](int32_t a, int32_t b) {
     return mesh.elems[a].first_child < mesh.elems[b].first_child;
   });
+  // Then the splits in their order: they commute with divisions (mesh.h).
+  for (int32_t p : mesh.splits) edits.push_back(~p);
   return edits;
 }
 
 bool ReplayDivisions(Mesh* mesh, const std::vector<int32_t>& edits, std::string* err) {
   for (size_t i = 0; i < edits.size(); ++i) {
     const int32_t e = edits[i];
-    if (e < 0 || size_t(e) >= mesh->elems.size() || !mesh->elems[e].IsLeaf()) {
+    if (e < 0) {
+      if (SplitPieces(*mesh, ~e) < 2) {
+        *err = "edit " + std::to_string(i + 1) + " of " + std::to_string(edits.size()) +
+               " splits patch " + std::to_string(~e) + ", which cannot be split";
+        return false;
+      }
+      SplitPatch(mesh, ~e);
+      continue;
+    }
+    if (size_t(e) >= mesh->elems.size() || !mesh->elems[e].IsLeaf()) {
       *err = "division " + std::to_string(i + 1) + " of " + std::to_string(edits.size()) +
              " names element " + std::to_string(e) + ", which is not a leaf of the mesh";
       return false;
@@ -330,6 +348,8 @@ std::string EncodeCheckpoint(const Checkpoint& c) {
     PutU8(&w, d.quiet);
     PutFixed64(&w, d.passes);
     PutF64(&w, d.seconds);
+    PutF64(&w, d.split_threshold);
+    PutFixed64(&w, d.splits);
   }
   const RunState& r = c.run;
   PutFixed32(&w, r.wave);
@@ -414,6 +434,8 @@ bool DecodeCheckpoint(const std::string& bytes, Checkpoint* c, std::string* err)
     d.quiet = r.Bool();
     d.passes = long(r.I64());
     d.seconds = r.F64();
+    d.split_threshold = r.F64();
+    d.splits = long(r.I64());
   }
   RunState& run = k.run;
   run.wave = r.I32();
@@ -502,7 +524,11 @@ std::string CompareOptions(const SolveOptions& a, const SolveOptions& b) {
   if (a.sub.waves != b.sub.waves) return flag("--no-waves", !a.sub.waves, !b.sub.waves);
   if (a.sub.wave_fraction != b.sub.wave_fraction)
     return differ("--wave-fraction", num(a.sub.wave_fraction), num(b.sub.wave_fraction));
-  if (a.sub.threshold != b.sub.threshold || a.sub.decay != b.sub.decay ||
+  if (a.sub.split != b.sub.split) return flag("--split", a.sub.split, b.sub.split);
+  if (a.sub.split && a.sub.split_floor != b.sub.split_floor)
+    return differ("--split-floor", num(a.sub.split_floor), num(b.sub.split_floor));
+  if (a.sub.split_threshold != b.sub.split_threshold || a.sub.threshold != b.sub.threshold ||
+      a.sub.decay != b.sub.decay ||
       a.sub.between != b.sub.between || a.sub.quiet != b.sub.quiet)
     return "made by a build with other subdivision settings";
   return "";

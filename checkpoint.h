@@ -28,15 +28,18 @@
 //             log_every, i32 elements per patch, f64 patch size, u8
 //             groups, f64 group size, u8 subdivide, f64 threshold, f64 floor, f64 decay, f64
 //             min_size, i32 max_level, u8 waves, f64 wave_fraction,
-//             i64 between, f64 quiet
-//   edits     ARRAY<i32>: the elements divided, in the order Divide() ran
+//             i64 between, f64 quiet, u8 split, f64 split_threshold,
+//             f64 split_floor
+//   edits     ARRAY<i32>: the elements divided, in the order Divide() ran,
+//             then ~p for each patch p split, in the order SplitPatch() ran
 //   solver    i64 shots, vec unshot_sum, f64 abs_sum, ARRAY<vec> B per
 //             element, ARRAY<vec> unshot per patch, ARRAY<u8> lit,
 //             ARRAY<u8> blind, ARRAY<i32> times shot, ARRAY<f64> noise
 //             per element (empty when the run does not divide)
 //   subdiv    u8 present; if 1: f64 threshold, i64 last_pass, i64
 //             wave_start_leaves, i64 divided_in_wave, u8 finished, u8
-//             quiet, i64 passes, f64 seconds
+//             quiet, i64 passes, f64 seconds, f64 split_threshold, i64
+//             splits
 //   run       i32 wave, i64 wave_start, f64 best, i64 best_at, f64
 //             seconds, i64 columns, ARRAY<i32> pending patches
 //   log       ARRAY<u8>: log.csv's rows so far, without the header
@@ -91,12 +94,14 @@ struct Checkpoint {
 std::string SceneHash(const Scene& scene);
 
 // The elements of `mesh` that Divide() divided, in the order it ran (a
-// child block's position in Mesh::elems gives it away): replayed on the
-// mesh as built they give this mesh again.
+// child block's position in Mesh::elems gives it away), then ~p for the
+// patches split (Mesh::splits): replayed on the mesh as built they give
+// this mesh again (divisions and splits commute, mesh.h).
 std::vector<int32_t> DivideHistory(const Mesh& mesh);
 
-// Divide() for each edit, each checked first (an element that exists and
-// is a leaf); false with *err at the first that is not.
+// Divide() for each edit e >= 0, SplitPatch(~e) for each e < 0, each
+// checked first (a leaf, a patch that can be split); false with *err at
+// the first that is not.
 bool ReplayDivisions(Mesh* mesh, const std::vector<int32_t>& edits, std::string* err);
 
 // What a checkpoint is checked against: the scene, the mesh as BuildMesh

@@ -199,12 +199,14 @@ void Hemicube::Scan(int face, const float (*pt)[2], int n, float za, float zb,
 
 bool Hemicube::Key::operator==(const Key& o) const {
   return mesh == o.mesh && verts == o.verts && elems == o.elems && nverts == o.nverts &&
-         nelems == o.nelems && nfaces == o.nfaces && divided == o.divided && first == o.first &&
+         nelems == o.nelems && nfaces == o.nfaces && divided == o.divided && splits == o.splits &&
+         first == o.first &&
          last == o.last;
 }
 
 // What changes when the mesh does: Divide() appends elements and vertices
-// and counts itself; a mesh built anew moves its arrays or their sizes or
+// and counts itself; SplitPatch() reorders a face's leaves and counts
+// itself; a mesh built anew moves its arrays or their sizes or
 // end points. Cheap enough to compare on every column.
 Hemicube::Key Hemicube::KeyOf(const Mesh& mesh) {
   Key k;
@@ -215,6 +217,7 @@ Hemicube::Key Hemicube::KeyOf(const Mesh& mesh) {
   k.nelems = mesh.elems.size();
   k.nfaces = mesh.faces.size();
   k.divided = mesh.divided;
+  k.splits = mesh.splits.size();
   if (!mesh.verts.empty()) {
     k.first = mesh.verts.front();
     k.last = mesh.verts.back();

@@ -96,6 +96,7 @@ class Hemicube {
     const void* elems = nullptr;
     size_t nverts = 0, nelems = 0, nfaces = 0;
     int divided = -1;
+    size_t splits = 0;
     glm::dvec3 first{0.0}, last{0.0};
     bool operator==(const Key& o) const;
   };

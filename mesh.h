@@ -149,6 +149,9 @@ struct Mesh {
   size_t border_count = 0;
   bool connected = false;                      // once ConnectEdges() ran
   int divided = 0;                             // Divide() calls so far
+  // The patches SplitPatch() split, in the order it ran (a patch may be
+  // split more than once): its pieces are the patches it appended.
+  std::vector<int32_t> splits;
 
   long LeafCount() const { return long(elems.size()) - divided; }
 
@@ -220,6 +223,23 @@ int Outline(const Element& e, int out[8]);
 // `elem`: alike, finer (across a T-vertex) or coarser. Needs
 // ConnectEdges().
 void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out);
+
+// Shooter division (split.cpp): a patch cut into smaller patches along
+// its elements. A patch of several top elements becomes one patch per top
+// element; a patch of one top element that is divided becomes one patch
+// per child. The patch keeps the first piece, the others are appended to
+// Mesh::patches (and to its face's list) in order, each element below a
+// piece moves to it, and Mesh::splits records the split. Deterministic,
+// and independent of divisions made before or after (a piece's elements
+// are those below its top element, divided or not), so divisions and
+// splits replayed in any interleaving that keeps each kind's order give
+// the same mesh. A patch in a shooter group is never split (groups.h).
+//
+// The pieces SplitPatch(p) would make (their top elements into *tops
+// when not null): 0 when p cannot be split (one top element and a leaf,
+// or a member of a group).
+int SplitPieces(const Mesh& mesh, int patch, std::vector<int>* tops = nullptr);
+void SplitPatch(Mesh* mesh, int patch);
 
 // A hash of the mesh geometry and hierarchy (vertex bits, element
 // vertices, parents), to check that a worker built what the master has

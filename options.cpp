@@ -125,6 +125,10 @@ const char kUsage[] =
     "      --min-element L    smallest element edge made by dividing (default: diagonal / 400)\n"
     "      --max-level N      deepest division below the built elements, 0..12 (default 2)\n"
     "      --wave-fraction F  a new wave after F of the elements divided (default 0.2)\n"
+    "      --split            split shooter patches whose pieces differ strongly in\n"
+    "                         radiosity (default: patches stay as built)\n"
+    "      --split-floor F    lowest shooter-division threshold, implies --split\n"
+    "                         (default 0.5)\n"
     "      --no-rotate        keep the hemicube aligned (default: turned per shot)\n"
     "      --seed N           seed of the hemicube turns (default 1)\n"
     "      --log-every N      shots between log.csv rows (default: patches / 100)\n"
@@ -151,7 +155,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
     kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
     kNoJoin, kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
     kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect, kConverge,
-    kCheckpoint, kCheckpointEvery, kResume, kNoGroups, kGroupSize, kView,
+    kCheckpoint, kCheckpointEvery, kResume, kNoGroups, kGroupSize, kView, kSplit, kSplitFloor,
   };
   static const option kLong[] = {
       {"out", required_argument, nullptr, 'o'},
@@ -182,6 +186,8 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       {"no-subdivide", no_argument, nullptr, kNoSubdivide},
       {"no-waves", no_argument, nullptr, kNoWaves},
       {"subdivide-floor", required_argument, nullptr, kFloor},
+      {"split", no_argument, nullptr, kSplit},
+      {"split-floor", required_argument, nullptr, kSplitFloor},
       {"min-element", required_argument, nullptr, kMinElement},
       {"max-level", required_argument, nullptr, kMaxLevel},
       {"wave-fraction", required_argument, nullptr, kWaveFraction},
@@ -206,7 +212,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   // Given on the command line: options that contradict others.
   bool quiet = false, verbose = false, no_subdivide = false, no_waves = false;
   bool wave_fraction = false;
-  std::string subdivide_limit;  // the last of --subdivide-floor, --min-element, --max-level
+  std::string subdivide_limit;  // the last of --subdivide-floor, --min-element, --max-level, --split-floor
   std::string& secret_file = o.secret_file;
   opterr = 0;
   optind = 0;  // glibc: start afresh, so that a second call parses its own argv
@@ -269,6 +275,12 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       case kFloor:
         ok = Number("--subdivide-floor", optarg, 1e-3, 100, &o.sub.floor, err);
         subdivide_limit = "--subdivide-floor";
+        break;
+      case kSplit: o.sub.split = true; break;
+      case kSplitFloor:
+        ok = Number("--split-floor", optarg, 1e-3, 100, &o.sub.split_floor, err);
+        o.sub.split = true;
+        subdivide_limit = "--split-floor";
         break;
       case kMinElement:
         ok = Number("--min-element", optarg, 1e-300, 1e300, &o.sub.min_size, err);
@@ -395,5 +407,6 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   if (!o.converge.empty() && !epsilon_given) o.run.epsilon = kConvergeEpsilon;
   // Dividing never asks less than its floor.
   o.sub.threshold = std::max(o.sub.threshold, o.sub.floor);
+  o.sub.split_threshold = std::max(o.sub.split_threshold, o.sub.split_floor);
   return Parsed::kRun;
 }

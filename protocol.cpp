@@ -346,10 +346,8 @@ void EncodeColumn(const Column& m, std::string* out) {
 void EncodeDivide(const std::vector<int32_t>& elems, std::string* out) {
   size_t start = BeginFrame(Msg::kDivide, out);
   PutVarint(out, elems.size());
-  for (int32_t e : elems) {
-    CHECK(e >= 0);
-    PutVarint(out, uint32_t(e));
-  }
+  // An edit e >= 0 divides element e, ~p splits patch p: 2e and 2p + 1.
+  for (int32_t e : elems) PutVarint(out, e >= 0 ? 2 * uint64_t(e) : 2 * uint64_t(~e) + 1);
   EndFrame(start, out);
 }
 
@@ -551,8 +549,11 @@ bool DecodeDivide(const std::string& payload, std::vector<int32_t>* m, std::stri
   uint64_t n;
   if (!r.Count(1, &n, "element count")) return false;
   std::vector<int32_t> d(static_cast<size_t>(n));
-  for (int32_t& e : d)
-    if (!r.Int32(&e, "element id")) return false;
+  for (int32_t& e : d) {
+    uint64_t x;
+    if (!r.Varint(2 * uint64_t(INT32_MAX) + 1, &x, "edit")) return false;
+    e = x & 1 ? ~int32_t(x >> 1) : int32_t(x >> 1);
+  }
   if (!r.End("divide")) return false;
   *m = std::move(d);
   return true;

@@ -32,7 +32,7 @@ enum class Msg : uint8_t {
   kReady = 3,      // worker -> master: mesh built
   kWork = 4,       // master -> worker: patches to compute
   kColumn = 5,     // worker -> master: one form-factor column
-  kDivide = 6,     // master -> worker: hierarchy edits
+  kDivide = 6,     // master -> worker: hierarchy edits (divisions, splits)
   kHeartbeat = 7,  // both ways, when nothing else was sent for a while
   kError = 8,      // both ways: a one-line reason, then the sender closes
   kBye = 9,        // master -> worker: exit now
@@ -96,6 +96,7 @@ void EncodeReady(const Ready& m, std::string* out);
 void EncodeWork(const std::vector<Assignment>& m, std::string* out);
 // The column's form factors as ffcodec.h codes them.
 void EncodeColumn(const Column& m, std::string* out);
+// Edits in the order made: e >= 0 divides element e, ~p splits patch p.
 void EncodeDivide(const std::vector<int32_t>& elems, std::string* out);
 void EncodeHeartbeat(std::string* out);
 void EncodeError(const std::string& text, std::string* out);

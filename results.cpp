@@ -469,7 +469,7 @@ glm::dvec3 Drawn(const Mesh& mesh, const ShadedMesh& shaded, int e, const glm::d
 
 void FieldError(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const Mesh& ref,
                 const std::vector<glm::dvec3>& ref_b, double* rms, double* rel_rms) {
-  CHECK(mesh.patches.size() == ref.patches.size());
+  CHECK(mesh.faces.size() == ref.faces.size());
   const ShadedMesh shaded = Shade(mesh, elem_b), ref_shaded = Shade(ref, ref_b);
   const double tol = 1e-12 * mesh.scene_diagonal * mesh.scene_diagonal;
   auto inside = [&](int e, const glm::dvec3& x, const glm::dvec3& n) {
@@ -485,11 +485,14 @@ void FieldError(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const M
     if (!rel.IsLeaf()) continue;
     const glm::dvec3 x = ref.Centroid(int(r));
     const glm::dvec3 n = ref.FaceOf(int(r)).normal;
-    // Patches are cut alike, so the point lies under the same patch here.
+    // Faces are cut alike, so the point lies under a top element of the
+    // same face here (patches may have been split, in either mesh).
+    const MeshFace& face = mesh.faces[size_t(ref.patches[rel.patch].face)];
     int e = -1;
-    for (int top : mesh.patches[rel.patch].elements)
-      if (inside(top, x, n)) { e = top; break; }
-    if (e < 0) e = mesh.patches[rel.patch].elements[0];  // rounding at an edge
+    for (size_t i = 0; i < face.patches.size() && e < 0; ++i)
+      for (int top : mesh.patches[size_t(face.patches[i])].elements)
+        if (inside(top, x, n)) { e = top; break; }
+    if (e < 0) e = mesh.patches[size_t(face.patches[0])].elements[0];  // rounding at an edge
     while (!mesh.elems[e].IsLeaf()) {
       int next = mesh.elems[e].first_child;
       for (int k = 0; k < kChildren; ++k)

@@ -12,8 +12,9 @@
 namespace {
 
 // Subdivision between two shots: a division pass if one is due after
-// `shots_in_wave` shots of this wave; the ids it divided, in order,
-// replace *edits (what workers must apply alike). Returns true when the
+// `shots_in_wave` shots of this wave; the ids it divided and ~the
+// patches it split, in order, replace *edits (what workers must apply
+// alike). Returns true when the
 // wave is over.
 bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wave,
             std::vector<int32_t>* changed, std::vector<int32_t>* edits) {
@@ -25,6 +26,15 @@ bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wa
                             shots_in_wave, *changed);
   for (int32_t e : *edits) Divide(mesh, e);
   solver->Divided(*edits);
+  // Shooter division: a split of patch p travels as the edit ~p, after
+  // the pass's divisions (doc/protocol.txt, divide).
+  const std::vector<int32_t> splits =
+      subdivider->SplitPass(*mesh, solver->radiosity(), solver->Ambient(), *changed, *edits);
+  for (int32_t p : splits) {
+    SplitPatch(mesh, p);
+    solver->Split(p);
+    edits->push_back(~p);
+  }
   subdivider->CountTime(ThreadCpuSeconds() - t0);
   return subdivider->WaveOver();
 }

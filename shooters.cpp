@@ -6,7 +6,8 @@
 
 void ShooterQueue::Build(const std::vector<double>& bounds, const std::vector<double>& weights) {
   CHECK(weights.size() == bounds.size());
-  if (bounds.size() != size_t(n_)) taken_.assign(bounds.size(), 0);
+  if (bounds.size() < size_t(n_)) taken_.clear();
+  taken_.resize(bounds.size(), 0);  // a split adds patches: what was taken stays
   n_ = int(bounds.size());
   bound_.resize(bounds.size());
   tree_.assign(2 * bounds.size(), -HUGE_VAL);

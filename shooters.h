@@ -33,7 +33,8 @@ class ShooterQueue {
  public:
   // Every bound set at once (-inf or NaN: never chosen), with each
   // shooter's weight (>= 0: how much of the drift applies to it), O(n).
-  // The taken stay taken; none is when n changes.
+  // The taken stay taken (when n grows, the new ones are not); none is
+  // when n shrinks.
   void Build(const std::vector<double>& bounds, const std::vector<double>& weights);
   int size() const { return n_; }
 

@@ -36,30 +36,16 @@ inline double ShotNoise(double g, double f, double df) {
 }  // namespace
 
 Solver::Solver(const Mesh& mesh, bool overshoot)
-    : mesh_(mesh),
-      overshoot_(overshoot),
-      fsum_(mesh.patches.size(), 0.0),
-      blind_(mesh.patches.size(), 0) {
+    : mesh_(mesh), overshoot_(overshoot), blind_(mesh.patches.size(), 0) {
+  PatchArrays();
   glm::dvec3 rho_area(0.0);
   for (size_t p = 0; p < mesh.patches.size(); ++p) {
     const MeshFace& f = mesh.faces[mesh.patches[p].face];
     const double a = mesh.patches[p].area;
-    rho_.push_back(f.rho);
-    center_.push_back(mesh.patches[p].center);
-    area_.push_back(a);
-    weight_.push_back(a * std::max({f.rho.r, f.rho.g, f.rho.b}));
     total_area_ += a;
     emitted_ += (f.emission.r + f.emission.g + f.emission.b) * a;
     rho_area += f.rho * a;
   }
-  // A group's drift moves Σ of its members' powers: its key (members[0])
-  // carries their weights summed, the other members none (never chosen).
-  for (const PatchGroup& g : mesh.groups)
-    for (size_t i = 1; i < g.members.size(); ++i) {
-      weight_[size_t(g.members[0])] += weight_[size_t(g.members[i])];
-      weight_[size_t(g.members[i])] = 0;
-    }
-  group_dirty_.assign(mesh.groups.size(), 0);
   if (total_area_ > 0) {
     // Cohen et al.'s interreflection factor 1/(1−ρ̄). ρ̄ = 1 (a scene that
     // reflects everything) has no finite answer; the cap keeps the estimate
@@ -68,6 +54,33 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
     reflect_ = 1.0 / (1.0 - mean);
   }
   NewWave();
+}
+
+// The per-patch arrays that follow from the mesh, for its patches as they
+// are (split ones included).
+void Solver::PatchArrays() {
+  const size_t n = mesh_.patches.size();
+  rho_.resize(n);
+  center_.resize(n);
+  area_.resize(n);
+  weight_.resize(n);
+  fsum_.assign(n, 0.0);
+  if (!pixel_df_.empty()) pixel_df_.resize(n);  // noise tracked: per patch too
+  for (size_t p = 0; p < n; ++p) {
+    const MeshFace& f = mesh_.faces[mesh_.patches[p].face];
+    rho_[p] = f.rho;
+    center_[p] = mesh_.patches[p].center;
+    area_[p] = mesh_.patches[p].area;
+    weight_[p] = area_[p] * std::max({f.rho.r, f.rho.g, f.rho.b});
+  }
+  // A group's drift moves Σ of its members' powers: its key (members[0])
+  // carries their weights summed, the other members none (never chosen).
+  for (const PatchGroup& g : mesh_.groups)
+    for (size_t i = 1; i < g.members.size(); ++i) {
+      weight_[size_t(g.members[0])] += weight_[size_t(g.members[i])];
+      weight_[size_t(g.members[i])] = 0;
+    }
+  group_dirty_.assign(mesh_.groups.size(), 0);
 }
 
 void Solver::NewWave() {
@@ -288,10 +301,20 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
       mesh_.LeavesUnder(e, &leaves_);
       const glm::dvec3 gain = xa * (f * (rho_[size_t(q)] / mesh_.elems[size_t(e)].area));
       const double var = noisy ? ShotNoise((gain.r + gain.g + gain.b) / 3, f, pixel(q)) : 0;
+      bool one_patch = true;
       for (int l : leaves_) {
         b_[l] += gain;
         if (noisy) noise_[l] += var;
         if (track_) Changed(l);
+        one_patch &= patch_of_[size_t(l)] == q;
+      }
+      if (!one_patch) {  // and split since: each piece reflects its leaves' share
+        for (int l : leaves_) {
+          const int32_t r = patch_of_[size_t(l)];
+          if (fsum_[r] == 0) touched_.push_back(r);
+          fsum_[r] += f * (mesh_.elems[size_t(l)].area / mesh_.elems[size_t(e)].area);
+        }
+        continue;
       }
     }
     if (fsum_[q] == 0) touched_.push_back(q);
@@ -423,6 +446,61 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
       b_[mesh_.elems[elems[i]].first_child + k] = shaped[kChildren * i + k];
 }
 
+void Solver::Split(int p) {
+  const size_t from = unshot_.size(), n = mesh_.patches.size();
+  const double whole = area_[size_t(p)];
+  const glm::dvec3 power = unshot_[size_t(p)] * whole, rho = rho_[size_t(p)];
+  const uint8_t lit = lit_[size_t(p)], blind = blind_[size_t(p)];
+  std::vector<int> pieces{p};
+  for (size_t q = from; q < n; ++q) pieces.push_back(int(q));
+  const MeshFace& face = mesh_.faces[size_t(mesh_.patches[size_t(p)].face)];
+  rho_.resize(n, rho);
+  area_.resize(n);
+  weight_.resize(n);
+  unshot_.resize(n);
+  lit_.resize(n, lit);
+  blind_.resize(n, blind);
+  times_shot_.resize(n, 0);
+  fsum_.resize(n, 0.0);
+  // What each piece's leaves received, per channel, and the pieces' own
+  // elements, divided ones complemented as Grow() keeps them.
+  std::vector<glm::dvec3> got(pieces.size(), glm::dvec3(0.0));
+  glm::dvec3 total(0.0);
+  for (size_t i = 0; i < pieces.size(); ++i) {
+    const int q = pieces[i];
+    area_[size_t(q)] = mesh_.patches[size_t(q)].area;
+    weight_[size_t(q)] = area_[size_t(q)] * std::max({face.rho.r, face.rho.g, face.rho.b});
+    std::vector<int> stack(mesh_.patches[size_t(q)].elements);
+    while (!stack.empty()) {
+      const int e = stack.back();
+      stack.pop_back();
+      const Element& el = mesh_.elems[size_t(e)];
+      if (!el.IsLeaf()) {
+        patch_of_[size_t(e)] = ~q;
+        for (int k = 0; k < kChildren; ++k) stack.push_back(el.first_child + k);
+        continue;
+      }
+      patch_of_[size_t(e)] = q;
+      got[i] += glm::max(b_[size_t(e)] - face.emission, glm::dvec3(0.0)) * el.area;
+    }
+    total += got[i];
+  }
+  // Shares per channel; the last piece takes what the others left, so
+  // that the shares' powers sum to p's as closely as doubles allow.
+  glm::dvec3 left = power;
+  for (size_t i = 0; i < pieces.size(); ++i) {
+    const int q = pieces[i];
+    glm::dvec3 share;
+    for (int c = 0; c < 3; ++c)
+      share[c] = total[c] > 0 ? got[i][c] / total[c] : area_[size_t(q)] / whole;
+    glm::dvec3 part = i + 1 < pieces.size() ? power * share : left;
+    left -= part;
+    unshot_[size_t(q)] = part / area_[size_t(q)];
+  }
+  Resum();
+  Rebase();
+}
+
 SolverState Solver::State() const {
   SolverState s;
   s.b = b_;
@@ -447,7 +525,11 @@ bool Solver::Restore(const SolverState& s, std::string* err) {
            std::to_string(mesh_.elems.size()) + " and " + std::to_string(np);
     return false;
   }
-  Grow();  // the mesh was divided since the constructor
+  // The mesh was divided and split since the constructor: every element's
+  // patch again, the patches' arrays for their count.
+  patch_of_.clear();
+  Grow();
+  PatchArrays();
   b_ = s.b;
   unshot_ = s.unshot;
   lit_ = s.lit;

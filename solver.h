@@ -89,6 +89,14 @@ class Solver {
   // (paper §4.4), fitted to the neighbours and limited to their range,
   // keeping Σ B·area. Unshot radiosity is per patch and stays.
   void Divided(const std::vector<int32_t>& elems);
+  // SplitPatch(p) was just applied to the mesh (the pieces are p and the
+  // patches appended since): p's unshot power Σ unshot·A is shared among
+  // the pieces by what their leaves received (Σ (B − Ke)·A per channel;
+  // by area where nothing was received), so no power is made or lost
+  // (to rounding); the pieces inherit p's flags and start their own shot
+  // counts. Emitters are never split (Subdivider::SplitPass), so what a
+  // piece holds is received light.
+  void Split(int p);
   // A new wave (paper §4.4): all computed radiosity is thrown away and the
   // solution starts again from the emitters, on the mesh as it is now.
   void NewWave();
@@ -125,6 +133,7 @@ class Solver {
   }
   void Resum();
   void Grow();
+  void PatchArrays();
 
   const Mesh& mesh_;
   bool overshoot_;

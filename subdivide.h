@@ -45,6 +45,19 @@
 // hemicube divides only the gradients it resolves: at R 64 an element
 // 1/16 of its distance across, under the shooter, covers 4 pixels, ±25%
 // in one shot, and even a full shadow edge there is at the limit.
+//
+// Shooter division (SplitPass) is led alike, at the same passes: a patch
+// whose pieces (SplitPieces: its top elements, or its one top element's
+// children) differ strongly in radiosity shoots from its centre light that
+// really leaves from its bright part (a table top round the contact
+// shadow of what stands on it), so it is split (SplitPatch) when
+//
+//   (max_i B_i - min_i B_i) / (max_i B_i + Kd·ambient + 0.2 × mean)
+//
+// exceeds its own threshold, lowered by `decay` every pass down to
+// split_floor; B_i is piece i's area-weighted mean luminance, the scale
+// that of the dividing factor. Emitters are never split (their light is
+// their own, not received), nor members of shooter groups (groups.h).
 #ifndef RADIOSITY_SUBDIVIDE_H
 #define RADIOSITY_SUBDIVIDE_H
 
@@ -65,6 +78,9 @@ struct SubdivideOptions {
   double wave_fraction = 0.2;  // of the wave's starting elements divided
   long between = 10;       // shots between passes (at least 10)
   double quiet = 0.002;    // a pass dividing under this fraction of the leaves is quiet
+  bool split = false;           // shooter division (SplitPass): --split
+  double split_threshold = 0.6; // the spread a patch must exceed, at first
+  double split_floor = 0.5;     // ... lowered by `decay` every pass down to this
   // Elements (mesh.elems, divided ones included) a pass may not go past:
   // a pass that would is dropped and subdivision ends (capped()).
   long max_elements = kMaxElements;
@@ -76,11 +92,12 @@ struct SubdivideOptions {
 
 // A Subdivider's state between passes (checkpoint.h).
 struct SubdividerState {
-  double threshold = 0;
+  double threshold = 0, split_threshold = 0;
   long last_pass = -1, wave_start_leaves = 0, divided_in_wave = 0;
   bool finished = false, quiet = false;
   long passes = 0;
   double seconds = 0;
+  long splits = 0;
 };
 
 class Subdivider {
@@ -116,6 +133,21 @@ class Subdivider {
   std::vector<int32_t> Pass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
                             const std::vector<double>& noise, const glm::dvec3& ambient,
                             long shots, const std::vector<int32_t>& changed);
+  // The patches to split after the pass just made (call it after Pass and
+  // after the divisions are applied and shared, Solver::Divided), in
+  // increasing id: those whose spread exceeds the split threshold
+  // (above). Only patches with an element in `changed` (as given to Pass)
+  // or `divided` (what it returned), new ones and those split last time
+  // are measured again; the others keep their pieces' radiosity from
+  // then, which is theirs now (their radiosity did not change), under the
+  // scale of now: so the result is that of measuring every patch, and a
+  // resumed run, which measures all at its first pass, splits alike.
+  // Lowers the split threshold. Empty without opts.split.
+  std::vector<int32_t> SplitPass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
+                                 const glm::dvec3& ambient, const std::vector<int32_t>& changed,
+                                 const std::vector<int32_t>& divided);
+  long splits() const { return splits_; }
+
   // Leaves whose factor the last pass computed.
   long evaluated() const { return evaluated_; }
 
@@ -149,6 +181,7 @@ class Subdivider {
                 bool* bounded);
   void Track(const Mesh& mesh);
   double PassBound(int pass, const glm::dvec3& ambient, double mean) const;
+  void Spread(const Mesh& mesh, const std::vector<glm::dvec3>& b, int p);
 
   SubdivideOptions opts_;
   // Per element, grown as the mesh is: may it be divided (a leaf above
@@ -165,6 +198,13 @@ class Subdivider {
   std::vector<double> pass_mean_;
   long evaluated_ = 0;
   double threshold_;
+  double split_threshold_;
+  double mean_ = 0;                // the lit scene's mean at the last Pass
+  // Per patch: its pieces' brightest and darkest mean luminance when last
+  // measured (lo > hi: to be measured), for SplitPass.
+  std::vector<double> hi_, lo_;
+  std::vector<int> tops_, leaves_; // SplitPass's scratch
+  long splits_ = 0;
   long first_ = 0;
   long last_pass_ = -1;       // shot of the last pass in this wave
   long wave_start_leaves_ = 0;

@@ -169,8 +169,17 @@ bool Worker::Handle(proto::Msg type, const std::string& payload, int* status,
       std::vector<int32_t> elems;
       if (!proto::DecodeDivide(payload, &elems, &why)) break;
       for (int32_t e : elems) {
-        // Divide() CHECKs these; from the wire they are input, not invariants.
-        if (e < 0 || size_t(e) >= mesh_.elems.size() || !mesh_.elems[e].IsLeaf()) {
+        // Divide() and SplitPatch() CHECK these; from the wire they are
+        // input, not invariants. ~p: split patch p.
+        if (e < 0) {
+          if (SplitPieces(mesh_, ~e) < 2) {
+            why = "cannot split patch " + std::to_string(~e);
+            break;
+          }
+          SplitPatch(&mesh_, ~e);
+          continue;
+        }
+        if (size_t(e) >= mesh_.elems.size() || !mesh_.elems[e].IsLeaf()) {
           why = "cannot divide element " + std::to_string(e);
           break;
         }

@@ -70,7 +70,7 @@ Checkpoint Filled() {
   c.options.seed = 7;
   c.options.mesh.patch_size = 0.25;
   c.options.sub.max_level = 3;
-  c.edits = {4, 0, 13};
+  c.edits = {4, 0, 13, ~1};
   c.solver.b = {glm::dvec3(1, 2, 3), glm::dvec3(-0.0, 1e-300, 4.5)};
   c.solver.unshot = {glm::dvec3(0.5), glm::dvec3(0.25), glm::dvec3(0)};
   c.solver.lit = {1, 0, 1};
@@ -87,6 +87,8 @@ Checkpoint Filled() {
   c.subdivider.quiet = true;
   c.subdivider.passes = 2;
   c.subdivider.seconds = 0.01;
+  c.subdivider.split_threshold = 0.4;
+  c.subdivider.splits = 1;
   c.run.wave = 2;
   c.run.wave_start = 30;
   c.run.best = HUGE_VAL;
@@ -138,14 +140,15 @@ TEST(Checkpoint, RoundTrip) {
 }
 
 // Format 3 (format 1 plus the two group options, 9 bytes, in 2; plus the
-// noise array, its 8-byte count here, in 3) pinned byte for byte (the
-// trailing SHA-256 covers every byte before it), and the scene and mesh
-// hashes a checkpoint is checked against are those format 1 had.
+// noise array, its 8-byte count here, the three shooter-division options,
+// 17 bytes, and their state, 16, in 3) pinned byte for byte (the trailing
+// SHA-256 covers every byte before it), and the scene and mesh hashes a
+// checkpoint is checked against are those format 1 had.
 TEST(Checkpoint, BytesAndHashesAreThoseOfFormat3) {
   const std::string bytes = EncodeCheckpoint(Filled());
-  EXPECT_EQ(bytes.size(), 614u);
+  EXPECT_EQ(bytes.size(), 651u);
   EXPECT_EQ(Hex(bytes.substr(bytes.size() - 32)),
-            "895d04f03478380d7693f2261c76190d6162f6d258f7080728fb0d9d1c085758");
+            "13210f615aafbc85cb5922a742aee42524826063901f37c1551cf4396d4fed48");
   EXPECT_EQ(Hex(SceneHash(ShadowScene())),
             "e5ded178170e67915e7e2c974f2f76313e56922c54aa9ce557da0635a7ee8021");
   EXPECT_EQ(MeshHash(MakeMesh(ShadowScene(), ShadowMesh())), 0x4305479c346ad8daull);
@@ -314,7 +317,7 @@ TEST(Checkpoint, DivideHistoryReplaysToTheSameMesh) {
   Mesh bad = built;
   EXPECT_FALSE(ReplayDivisions(&bad, {2, 2}, &err));
   EXPECT_EQ(err, "division 2 of 2 names element 2, which is not a leaf of the mesh");
-  EXPECT_FALSE(ReplayDivisions(&bad, {-1}, &err));
+  EXPECT_FALSE(ReplayDivisions(&bad, {~int32_t(built.patches.size())}, &err));
 }
 
 TEST(Checkpoint, IdentityRefusesAnotherSceneAndOtherOptions) {

@@ -465,7 +465,8 @@ TEST(Protocol, WorkRoundTrips) {
 
 TEST(Protocol, DivideRoundTripsInOrder) {
   for (const auto& v : {std::vector<int32_t>{}, std::vector<int32_t>{0},
-                        std::vector<int32_t>{900, 3, 17, 2000000, 4, INT32_MAX}}) {
+                        std::vector<int32_t>{900, 3, 17, 2000000, 4, INT32_MAX},
+                        std::vector<int32_t>{~0, 5, ~INT32_MAX, ~7}}) {  // ~p: splits
     std::string frame;
     proto::EncodeDivide(v, &frame);
     std::vector<int32_t> d = {42};
@@ -476,7 +477,7 @@ TEST(Protocol, DivideRoundTripsInOrder) {
   std::string p, err;
   WVar(&p, 2);
   WVar(&p, 5);
-  WVar(&p, 1ull << 31);
+  WVar(&p, 1ull << 32);  // edits are 2e or 2p + 1 below 2^32
   std::vector<int32_t> d;
   EXPECT_FALSE(proto::DecodeDivide(p, &d, &err));
   EXPECT_FALSE(err.empty());

@@ -1,0 +1,196 @@
+// Shooter division: SplitPatch (split.cpp), the solver's share of the
+// unshot power (Solver::Split), the policy (Subdivider::SplitPass), and
+// the edit on the wire and in checkpoints.
+#include <gtest/gtest.h>
+
+#include "checkpoint.h"
+#include "protocol.h"
+#include "scheduler.h"
+#include "solver.h"
+#include "subdivide.h"
+#include "test_util.h"
+
+namespace {
+
+// A floor of 1 x 1 under a small emitting square: the floor's patches are
+// lit unevenly (bright under the light, dark far off).
+Scene Floor() {
+  Scene s = EmptyScene();
+  AddFace(&s, {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}}, glm::dvec3(0.6), glm::dvec3(0));
+  AddFace(&s, {{0.4, 0.3, 0.4}, {0.6, 0.3, 0.4}, {0.6, 0.3, 0.6}, {0.4, 0.3, 0.6}},
+          glm::dvec3(0.5), glm::dvec3(10.0));
+  return s;
+}
+
+MeshOptions Coarse() {
+  MeshOptions o;
+  o.patch_size = 0.5;  // the floor: 2 x 2 patches of 2 x 2 elements
+  return o;
+}
+
+double Sum(const std::vector<glm::dvec3>& unshot, const Mesh& m, int c) {
+  double s = 0;
+  for (size_t p = 0; p < unshot.size(); ++p) s += unshot[p][c] * m.patches[p].area;
+  return s;
+}
+
+TEST(Split, PiecesAreTheTopElementsThenTheirChildren) {
+  Mesh m = MakeMesh(Floor(), Coarse());
+  const size_t patches = m.patches.size();
+  ASSERT_EQ(m.patches[0].elements.size(), 4u);
+  const std::vector<int> tops = m.patches[0].elements;
+  const double area = m.patches[0].area;
+  Divide(&m, tops[1]);  // divided before the split: its children follow it
+  ASSERT_EQ(SplitPieces(m, 0), 4);
+  SplitPatch(&m, 0);
+  ASSERT_EQ(m.patches.size(), patches + 3);
+  EXPECT_EQ(m.splits, (std::vector<int32_t>{0}));
+  double sum = 0;
+  for (int p : {0, int(patches), int(patches) + 1, int(patches) + 2}) {
+    ASSERT_EQ(m.patches[p].elements.size(), 1u);
+    sum += m.patches[p].area;
+    std::vector<int> leaves;
+    m.Leaves(p, &leaves);
+    for (int l : leaves) EXPECT_EQ(m.elems[l].patch, p);
+    EXPECT_EQ(m.group_of[p], -1);
+  }
+  EXPECT_NEAR(sum, area, 1e-15);
+  EXPECT_EQ(m.elems[m.elems[tops[1]].first_child].patch, int(patches));
+  // A piece of one leaf cannot be split; one whose element is divided can.
+  EXPECT_EQ(SplitPieces(m, 0), 0);
+  EXPECT_EQ(SplitPieces(m, int(patches)), 4);
+  SplitPatch(&m, int(patches));
+  EXPECT_EQ(m.patches.size(), patches + 6);
+  EXPECT_EQ(SplitPieces(m, -1), 0);
+  EXPECT_EQ(SplitPieces(m, int(m.patches.size())), 0);
+}
+
+// Divisions and splits commute: replayed divisions first, then splits, as
+// checkpoints and late workers do, they give the mesh made interleaved.
+TEST(Split, ReplayedInAnyInterleavingGivesTheSameMesh) {
+  const Mesh built = MakeMesh(Floor(), Coarse());
+  Mesh m = built;
+  SplitPatch(&m, 1);
+  Divide(&m, m.patches[1].elements[0]);
+  SplitPatch(&m, 1);
+  Divide(&m, 3);
+  SplitPatch(&m, 2);
+  const std::vector<int32_t> edits = DivideHistory(m);
+  EXPECT_EQ(edits.back(), ~2);
+  Mesh again = built;
+  std::string err;
+  ASSERT_TRUE(ReplayDivisions(&again, edits, &err)) << err;
+  EXPECT_EQ(MeshHash(again), MeshHash(m));
+  EXPECT_NE(MeshHash(again), MeshHash(built));
+  Mesh bad = built;
+  EXPECT_FALSE(ReplayDivisions(&bad, {~int32_t(built.patches.size())}, &err));
+  EXPECT_EQ(err, "edit 1 of 1 splits patch " + std::to_string(built.patches.size()) +
+                     ", which cannot be split");
+}
+
+TEST(Split, EditsTravelInOrderOnTheWire) {
+  const std::vector<int32_t> edits{5, ~3, 0, ~0, 2147483647, ~2147483647};
+  std::string frame;
+  proto::EncodeDivide(edits, &frame);
+  std::vector<int32_t> back;
+  std::string err;
+  ASSERT_TRUE(proto::DecodeDivide(frame.substr(proto::kHeaderSize), &back, &err)) << err;
+  EXPECT_EQ(back, edits);
+}
+
+// The unshot power is shared, not made or lost; the pieces' shares follow
+// what their leaves received.
+TEST(Split, SolverKeepsTheUnshotPower) {
+  Mesh m = MakeMesh(Floor(), Coarse());
+  Solver solver(m, false);  // no overshooting: every unshot power >= 0
+  Hemicube h(64);
+  std::vector<FormFactor> col;
+  for (int i = 0; i < 3; ++i) {  // the light's patch, then a floor patch or two
+    const int p = solver.Select();
+    ShotColumn(&h, m, p, solver.TimesShot(p), true, 1, &col);
+    solver.Shoot(p, col);
+  }
+  int p = 0;
+  while (m.faces[m.patches[p].face].emission != glm::dvec3(0) ||
+         solver.unshot()[p].r == 0)
+    ++p;
+  const glm::dvec3 before(Sum(solver.unshot(), m, 0), Sum(solver.unshot(), m, 1),
+                          Sum(solver.unshot(), m, 2));
+  const size_t patches = m.patches.size();
+  const double whole = solver.unshot()[p].r * m.patches[p].area;
+  ASSERT_GT(whole, 0);
+  SplitPatch(&m, p);
+  solver.Split(p);
+  ASSERT_EQ(solver.unshot().size(), m.patches.size());
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(Sum(solver.unshot(), m, c), before[c], 1e-13 * before[c]);
+  // By received radiosity: the brightest piece holds the most.
+  std::vector<int> pieces{p};
+  for (size_t q = patches; q < m.patches.size(); ++q) pieces.push_back(int(q));
+  double got = 0;
+  for (int q : pieces) got += solver.unshot()[q].r * m.patches[q].area;
+  EXPECT_NEAR(got, whole, 1e-13 * whole);
+  int brightest = -1, richest = -1;
+  double bb = -1, rb = -1;
+  for (int q : pieces) {
+    const int e = m.patches[q].elements[0];
+    if (solver.radiosity()[e].r > bb) bb = solver.radiosity()[e].r, brightest = q;
+    if (solver.unshot()[q].r > rb) rb = solver.unshot()[q].r, richest = q;
+  }
+  EXPECT_EQ(richest, brightest);
+  // And shooting goes on: the pieces are selected like any patch.
+  for (int i = 0; i < 20; ++i) {
+    const int s = solver.Select();
+    ASSERT_GE(s, 0);
+    ShotColumn(&h, m, s, solver.TimesShot(s), true, 1, &col);
+    solver.Shoot(s, col);
+  }
+}
+
+// The policy: a patch whose pieces differ strongly is split, an even one
+// is not, nor an emitter, and the threshold goes down to the floor.
+TEST(Split, PolicySplitsUnevenPatchesOnly) {
+  Mesh m = MakeMesh(Floor(), Coarse());
+  SubdivideOptions so;
+  so.split = true;
+  Subdivider sub(&m, so);
+  std::vector<glm::dvec3> b(m.elems.size(), glm::dvec3(1.0));
+  b[size_t(m.patches[2].elements[0])] = glm::dvec3(0.2);  // patch 2: one dark piece
+  b[size_t(m.patches[1].elements[3])] = glm::dvec3(0.8);  // patch 1: a little uneven
+  for (int p : m.faces[1].patches)  // the light: uneven, never split
+    b[size_t(m.patches[p].elements[0])] = glm::dvec3(0.0);
+  sub.Pass(m, b, {}, glm::dvec3(0.0), 100, {});
+  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {}, {}), (std::vector<int32_t>{2}));
+  SplitPatch(&m, 2);  // into pieces of one leaf each: none splits again
+  // Measured again only where a leaf changed: patch 1, now darker there.
+  b[size_t(m.patches[1].elements[3])] = glm::dvec3(0.3);
+  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {}, {}), (std::vector<int32_t>{}));
+  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {m.patches[1].elements[3]}, {}),
+            (std::vector<int32_t>{1}));
+  EXPECT_EQ(sub.splits(), 2);
+  EXPECT_EQ(sub.State().split_threshold, so.split_floor);  // 0.6 · 0.7 < 0.5
+  so.split = false;
+  Subdivider off(&m, so);
+  EXPECT_TRUE(off.SplitPass(m, b, glm::dvec3(0.0), {}, {}).empty());
+}
+
+// A furnace splits nothing, through a whole run with its division passes.
+TEST(Split, FurnaceSplitsNothing) {
+  const Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)});
+  MeshOptions mo;
+  mo.patch_size = 0.25;
+  Mesh m = MakeMesh(s, mo);
+  const size_t built = m.patches.size();
+  Solver solver(m, true);
+  SubdivideOptions so;
+  so.split = true;
+  Subdivider sub(&m, so);
+  RunOptions ro;
+  ro.resolution = 128;
+  ro.epsilon = 1e-4;
+  ASSERT_EQ(RunSequential(&m, ro, &solver, &sub, nullptr).status, RunStatus::kConverged);
+  EXPECT_GT(sub.passes(), 0);
+  EXPECT_EQ(m.patches.size(), built);
+  EXPECT_EQ(sub.splits(), 0);
+}
+
+}  // namespace
