@@ -462,6 +462,8 @@ void Solver::Split(int p) {
   blind_.resize(n, blind);
   times_shot_.resize(n, 0);
   fsum_.resize(n, 0.0);
+  center_.resize(n);
+  if (!pixel_df_.empty()) pixel_df_.resize(n);  // noise tracked
   // What each piece's leaves received, per channel, and the pieces' own
   // elements, divided ones complemented as Grow() keeps them.
   std::vector<glm::dvec3> got(pieces.size(), glm::dvec3(0.0));
@@ -469,6 +471,7 @@ void Solver::Split(int p) {
   for (size_t i = 0; i < pieces.size(); ++i) {
     const int q = pieces[i];
     area_[size_t(q)] = mesh_.patches[size_t(q)].area;
+    center_[size_t(q)] = mesh_.patches[size_t(q)].center;
     weight_[size_t(q)] = area_[size_t(q)] * std::max({face.rho.r, face.rho.g, face.rho.b});
     std::vector<int> stack(mesh_.patches[size_t(q)].elements);
     while (!stack.empty()) {
