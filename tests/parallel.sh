@@ -19,12 +19,11 @@
 SCENES=$(cd "$(dirname "$0")/../scenes" && pwd)
 MAZE=$SCENES/maze.obj
 # The maze (four lights, corridors), converged far enough that parallel and
-# sequential runs meet (0.05% apart measured, at R 256 too), and long enough
-# (7,000 shots) to be hit in the middle by the fault tests below; R 128
-# halves the time of its nine runs. Not the room: the thin sides of its
-# picture frames are so under-sampled by the hemicube that a change of
-# --seed alone moves them by 30%, and shot order by 0.5%.
-ARGS=(-e 1e-5 -r 128)
+# sequential runs meet (0.01% apart measured), and long enough (seconds) to
+# be hit in the middle by the fault tests below. Not the room: the thin
+# sides of its picture frames are so under-sampled by the hemicube that a
+# change of --seed alone moves them by 30%, and shot order by 0.5%.
+ARGS=(-e 1e-5 -r 256)
 
 run_ok "maze, sequential" "$T/seq" -j 0 "${ARGS[@]}" "$MAZE" || finish
 for j in 1 2 4; do
