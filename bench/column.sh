@@ -9,7 +9,7 @@
 # front-facing face).
 #   sh bench/column.sh [quick]       quick: up to 10^5 elements
 # BEFORE=REV (default 5298a27, the column before culling): REV's
-# hemicube.{h,cpp} built with bench/column.cpp against this tree's other
+# hemicube.{h,cpp} (and hemicube_cache.cpp where REV has it) built with bench/column.cpp against this tree's other
 # objects into bench/results/tmp/ (a note instead if that no longer builds).
 # R: resolution (default 256); COLUMNS: shooters per scene (default 40).
 # Scenes are generated once into bench/results/tmp/scenes/ (not in git).
@@ -32,8 +32,14 @@ if [ ! -x "$old/radiosity-column" ]; then
   { git show "$rev:hemicube.cpp" >"$old/hemicube.cpp" && git show "$rev:hemicube.h" >"$old/hemicube.h" &&
     ${CXX:-g++} $flags -I"$old" -I. -c -o "$old/hemicube.o" "$old/hemicube.cpp" &&
     ${CXX:-g++} $flags -I"$old" -I. -c -o "$old/column.o" bench/column.cpp &&
-    # shellcheck disable=SC2086 # objs
-    ${CXX:-g++} -o "$old/radiosity-column" "$old/column.o" $objs "$old/hemicube.o" -lpthread; } \
+    # REV's cache too, where it has one of its own (split out of hemicube.cpp).
+    cache= && if git cat-file -e "$rev:hemicube_cache.cpp" 2>/dev/null; then
+      git show "$rev:hemicube_cache.cpp" >"$old/hemicube_cache.cpp" &&
+        ${CXX:-g++} $flags -I"$old" -I. -c -o "$old/hemicube_cache.o" "$old/hemicube_cache.cpp" &&
+        cache="$old/hemicube_cache.o"
+    fi &&
+    # shellcheck disable=SC2086 # objs, cache
+    ${CXX:-g++} -o "$old/radiosity-column" "$old/column.o" $objs "$old/hemicube.o" $cache -lpthread; } \
     >"$old/build.log" 2>&1 || rm -f "$old/radiosity-column"
 fi
 

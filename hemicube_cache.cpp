@@ -1,0 +1,170 @@
+// The hemicube's per-mesh cache (declared in hemicube.h): each face's
+// plane, box and element outlines laid out flat in the order a column reads
+// them, and the bounding-volume hierarchy over the faces, rebuilt when the
+// mesh changes (Key). Drawing a column from it is hemicube.cpp's.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#include "check.h"
+#include "groups.h"
+#include "hemicube.h"
+
+bool Hemicube::Key::operator==(const Key& o) const {
+  return mesh == o.mesh && verts == o.verts && elems == o.elems && nverts == o.nverts &&
+         nelems == o.nelems && nfaces == o.nfaces && divided == o.divided && splits == o.splits &&
+         first == o.first &&
+         last == o.last;
+}
+
+// What changes when the mesh does: Divide() appends elements and vertices
+// and counts itself; SplitPatch() reorders a face's leaves and counts
+// itself; a mesh built anew moves its arrays or their sizes or
+// end points. Cheap enough to compare on every column.
+Hemicube::Key Hemicube::KeyOf(const Mesh& mesh) {
+  Key k;
+  k.mesh = &mesh;
+  k.verts = mesh.verts.data();
+  k.elems = mesh.elems.data();
+  k.nverts = mesh.verts.size();
+  k.nelems = mesh.elems.size();
+  k.nfaces = mesh.faces.size();
+  k.divided = mesh.divided;
+  k.splits = mesh.splits.size();
+  if (!mesh.verts.empty()) {
+    k.first = mesh.verts.front();
+    k.last = mesh.verts.back();
+  }
+  return k;
+}
+
+void Hemicube::BuildCache(const Mesh& mesh) {
+  key_ = KeyOf(mesh);
+  // First in face order: planes, boxes and ranks (the order a plain
+  // z-buffer draws the leaves in, which breaks depth ties).
+  std::vector<CacheFace> byface;
+  std::vector<int> leaves;
+  // Reserved to their sizes (an upper bound for byface): grown by doubling,
+  // the two copies of faces were the largest thing a -j 0 master held.
+  byface.reserve(mesh.faces.size());
+  elem_.clear();
+  elem_.reserve(size_t(mesh.LeafCount()));
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const MeshFace& mf = mesh.faces[f];
+    CacheFace cf;
+    cf.face = int(f);
+    cf.normal = mf.normal;
+    cf.offset = mf.offset;
+    cf.lb = int(elem_.size());
+    for (int p : mf.patches) {
+      mesh.Leaves(p, &leaves);
+      elem_.insert(elem_.end(), leaves.begin(), leaves.end());
+    }
+    cf.le = int(elem_.size());
+    if (cf.le == cf.lb) continue;  // nothing to draw
+    cf.lo = cf.hi = mesh.verts[mf.vbegin];
+    auto grow = [&](int i) {
+      cf.lo = glm::min(cf.lo, mesh.verts[i]);
+      cf.hi = glm::max(cf.hi, mesh.verts[i]);
+    };
+    for (int i = mf.vbegin; i < mf.vend; ++i) grow(i);
+    for (int i : mf.divide_verts) grow(i);
+    byface.push_back(cf);
+  }
+  std::vector<int> order(byface.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = int(i);
+  nodes_.clear();
+  if (!order.empty()) BuildNodes(byface, &order, 0, int(order.size()));
+
+  // Then laid out in the hierarchy's order, the order a column reads them:
+  // each face's vertices and its leaves' outlines together.
+  faces_.clear();
+  faces_.reserve(order.size());
+  by_face_.assign(order.size(), 0);
+  outline_.clear();
+  outline_at_.assign(1, 0);
+  std::vector<int> rel(mesh.verts.size(), -1);  // this face's vertices only
+  size_t most = 0;
+  for (int k : order) {
+    by_face_[k] = int(faces_.size());
+    CacheFace cf = byface[k];
+    const MeshFace& mf = mesh.faces[cf.face];
+    cf.vb = mf.vbegin;
+    cf.ve = mf.vend;
+    cf.nd = int(mf.divide_verts.size());
+    // Face-relative indices, in the order DrawFace transforms them, keep
+    // the order of vertex ids (Divide appends), which the near-plane clip
+    // relies on to cut shared edges alike.
+    int n = 0;
+    for (int i = mf.vbegin; i < mf.vend; ++i) rel[i] = n++;
+    int last = mf.vend - 1;
+    for (int i : mf.divide_verts) {
+      CHECK(i > last && rel[i] < 0);
+      rel[last = i] = n++;
+    }
+    most = std::max(most, size_t(n));
+    cf.pb = int(outline_at_.size()) - 1;
+    for (int r = cf.lb; r < cf.le; ++r) {
+      int vid[8];
+      const int nv = Outline(mesh.elems[elem_[r]], vid);
+      for (int i = 0; i < nv; ++i) {
+        CHECK(rel[vid[i]] >= 0);  // a vertex of this face
+        outline_.push_back(rel[vid[i]]);
+      }
+      outline_at_.push_back(int(outline_.size()));
+    }
+    for (int i = mf.vbegin; i < mf.vend; ++i) rel[i] = -1;
+    for (int i : mf.divide_verts) rel[i] = -1;
+    faces_.push_back(cf);
+  }
+  for (auto* a : {&lx_, &ly_, &lz_}) a->resize(most);
+  code_.resize(most);
+  for (int h = 0; h < 5; ++h) {
+    sx_[h].resize(most);
+    sy_[h].resize(most);
+  }
+  acc_.assign(mesh.elems.size(), 0.0);
+  touched_.assign((mesh.elems.size() + 63) / 64, 0);
+}
+
+// Median split along the box's longest axis, down to a few faces a node:
+// a face's own test is as cheap as a node's, and a leaf of 8 small faces
+// costs fewer node tests than it draws in vain (a tessellated scene: about
+// 8% less time than 4 a leaf, 16 no better).
+int Hemicube::BuildNodes(const std::vector<CacheFace>& faces, std::vector<int>* order,
+                         int first, int count) {
+  constexpr int kLeafFaces = 8;
+  const int at = int(nodes_.size());
+  nodes_.emplace_back();
+  Node nd;
+  nd.lo = faces[(*order)[first]].lo;
+  nd.hi = faces[(*order)[first]].hi;
+  for (int i = first; i < first + count; ++i) {
+    nd.lo = glm::min(nd.lo, faces[(*order)[i]].lo);
+    nd.hi = glm::max(nd.hi, faces[(*order)[i]].hi);
+  }
+  if (count <= kLeafFaces) {
+    nd.first = first;
+    nd.count = count;
+  } else {
+    const glm::dvec3 ext = nd.hi - nd.lo;
+    const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : ext.y >= ext.z ? 1 : 2;
+    const int mid = first + count / 2;
+    std::nth_element(order->begin() + first, order->begin() + mid,
+                     order->begin() + first + count, [&](int a, int b) {
+                       return faces[a].lo[axis] + faces[a].hi[axis] <
+                              faces[b].lo[axis] + faces[b].hi[axis];
+                     });
+    BuildNodes(faces, order, first, mid - first);
+    nd.right = BuildNodes(faces, order, mid, first + count - mid);
+  }
+  nodes_[at] = nd;
+  return at;
+}
+
+// Whether a pixel of hemicube face h in [xa, xb) x [ra, rb) holds a depth
+// <= zt (something at zt could show there): tile by tile, by the tile's
+// least depth where that settles it (kept up to date lazily: Scan marks
+// the tiles it writes), else pixel by pixel in the tile's part of the
+// rectangle, stopping at the first.
