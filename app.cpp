@@ -488,12 +488,20 @@ void MasterRun::WriteOutputs() {
     final_state.workers = workers_;
     final_state.snapshot = 1;
     final_state.snapshot_shots = r.shots;
-    std::string blob = ViewMeshBlob(shaded.first, shaded.second);
+    // Written as it is encoded: at 10^6 elements the page is some 100 MB.
+    const std::string state = ViewStateJson(ViewOf(), final_state, log_.rows(), 0);
     if (!WriteFileAtomic(staging_.Path("view.html"),
-                         OfflineViewPage(ViewStateJson(ViewOf(), final_state, log_.rows(), 0), blob),
+                         [&](const FileSink& put) {
+                           return WriteOfflineViewPage(
+                               state,
+                               [&](const FileSink& blob) {
+                                 return ViewMeshBlob(shaded.first, shaded.second, blob);
+                               },
+                               put);
+                         },
                          &err))
       Die(kExitFailure, err);
-    if (view_) view_->Finish(std::move(blob), r.shots, how);
+    if (view_) view_->Finish(ViewMeshBlob(shaded.first, shaded.second), r.shots, how);
   }
   if (!opts_.converge.empty()) {
     // A reference must be converged: one cut short by -s, -t or a signal

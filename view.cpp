@@ -8,6 +8,7 @@
 
 #include "check.h"
 #include "coding.h"
+#include "files.h"
 
 namespace {
 
@@ -34,17 +35,61 @@ std::string Vec(const glm::dvec3& v) {
   return "[" + Number("%.17g", v.x) + "," + Number("%.17g", v.y) + "," + Number("%.17g", v.z) + "]";
 }
 
-// The page with `scripts` in place of its script tag.
-std::string Page(const std::string& scripts) {
-  std::string html = kViewHtml;
+// view.html split at its script tag: what comes before and after the
+// scripts put in its place.
+std::pair<std::string, std::string> PageHalves() {
+  const std::string html = kViewHtml;
   const size_t at = html.find(kScriptTag);
   CHECK(at != std::string::npos);
-  return html.replace(at, sizeof kScriptTag - 1, scripts);
+  return {html.substr(0, at), html.substr(at + sizeof kScriptTag - 1)};
 }
 
-std::string Script(const std::string& attributes, const std::string& body) {
-  return "<script" + attributes + ">" + body + "</script>";
-}
+// Base64 handed on a piece at a time: whole 3-byte groups are encoded as
+// they come, the last one or two bytes held until more come or Finish.
+class Base64Writer {
+ public:
+  explicit Base64Writer(const FileSink& put) : put_(put) {}
+  bool Add(const char* data, size_t size) {
+    while (size > 0 && ok_) {
+      if (held_ == 0 && size >= 3) {
+        // libcrypto's encoder (linked for crypto.cpp) takes an int length.
+        const size_t n = std::min(size / 3 * 3, kPiece);
+        const size_t len = n / 3 * 4;
+        buf_.resize(len + 1);  // room for the NUL EVP_EncodeBlock ends with
+        EVP_EncodeBlock(reinterpret_cast<unsigned char*>(&buf_[0]),
+                        reinterpret_cast<const unsigned char*>(data), int(n));
+        ok_ = put_(buf_.data(), len);
+        data += n;
+        size -= n;
+      } else {
+        hold_[held_++] = *data++;
+        --size;
+        if (held_ == 3) Flush();
+      }
+    }
+    return ok_;
+  }
+  bool Finish() {
+    if (held_ > 0 && ok_) Flush();
+    return ok_;
+  }
+
+ private:
+  static constexpr size_t kPiece = size_t(3) << 20;
+  void Flush() {
+    unsigned char out[5];
+    EVP_EncodeBlock(out, reinterpret_cast<const unsigned char*>(hold_), int(held_));
+    ok_ = put_(reinterpret_cast<const char*>(out), 4);
+    held_ = 0;
+  }
+  const FileSink& put_;
+  std::string buf_;
+  char hold_[3];
+  size_t held_ = 0;
+  bool ok_ = true;
+};
+
+bool Put(const FileSink& put, const std::string& s) { return put(s.data(), s.size()); }
 
 }  // namespace
 
@@ -71,7 +116,7 @@ std::string ViewStateJson(const ViewInfo& info, const ViewState& state,
   return s + "]}";
 }
 
-std::string ViewMeshBlob(const ShadedMesh& mesh, float exposure) {
+bool ViewMeshBlob(const ShadedMesh& mesh, float exposure, const FileSink& put) {
   const size_t n = mesh.positions().size();
   size_t tris = 0;
   for (const auto& q : mesh.polys) tris += q[3] < 0 ? 1 : 2;
@@ -82,45 +127,77 @@ std::string ViewMeshBlob(const ShadedMesh& mesh, float exposure) {
     hi = glm::max(hi, p);
   }
   const glm::dvec3 origin = n ? 0.5 * (lo + hi) : glm::dvec3(0.0);
+  // Handed on about a megabyte at a time: at 10^6 elements the whole is
+  // some 75 MB, and its Base64 in view.html a third more.
+  constexpr size_t kPiece = size_t(1) << 20;
   std::string out;
-  out.reserve(40 + 24 * n + 12 * tris);
+  out.reserve(kPiece + 64);
+  bool ok = true;
+  auto flush = [&](size_t at_least) {
+    if (ok && out.size() >= at_least) {
+      ok = put(out.data(), out.size());
+      out.clear();
+    }
+  };
   out += "RVW1";
   PutFixed32(&out, uint32_t(n));
   PutFixed32(&out, uint32_t(tris));
   PutF32(&out, exposure);
   PutVec(&out, origin);
-  for (const glm::dvec3& p : mesh.positions())
+  for (const glm::dvec3& p : mesh.positions()) {
     for (int k = 0; k < 3; ++k) PutF32(&out, float(p[k] - origin[k]));
-  for (const glm::vec3& c : mesh.colors)
+    flush(kPiece);
+  }
+  for (const glm::vec3& c : mesh.colors) {
     for (int k = 0; k < 3; ++k) PutF32(&out, c[k] > 0 ? c[k] : 0.0f);  // also NaN to 0
+    flush(kPiece);
+  }
   for (const auto& q : mesh.polys) {
     for (int k : {0, 1, 2}) PutFixed32(&out, uint32_t(q[k]));
     if (q[3] >= 0)
       for (int k : {0, 2, 3}) PutFixed32(&out, uint32_t(q[k]));
+    flush(kPiece);
   }
+  flush(1);
+  return ok;
+}
+
+std::string ViewMeshBlob(const ShadedMesh& mesh, float exposure) {
+  std::string out;
+  ViewMeshBlob(mesh, exposure, [&out](const char* data, size_t size) {
+    out.append(data, size);
+    return true;
+  });
   return out;
 }
 
-std::string ViewPage() { return Page(Script("", kViewJs)); }
+std::string ViewPage() {
+  const auto [head, tail] = PageHalves();
+  return head + "<script>" + kViewJs + "</script>" + tail;
+}
 
-std::string OfflineViewPage(const std::string& state_json, const std::string& mesh_blob) {
-  return Page(Script(" id=\"radiosity-state\" type=\"application/json\"", state_json) +
-              Script(" id=\"radiosity-mesh\" type=\"application/octet-stream\"", Base64(mesh_blob)) +
-              Script("", kViewJs));
+bool WriteOfflineViewPage(const std::string& state_json,
+                          const std::function<bool(const FileSink&)>& mesh_blob,
+                          const FileSink& put) {
+  const auto [head, tail] = PageHalves();
+  Base64Writer base64(put);
+  return Put(put, head) &&
+         Put(put, "<script id=\"radiosity-state\" type=\"application/json\">" + state_json +
+                      "</script><script id=\"radiosity-mesh\" type=\"application/octet-stream\">") &&
+         mesh_blob([&base64](const char* data, size_t size) { return base64.Add(data, size); }) &&
+         base64.Finish() && Put(put, std::string("</script><script>") + kViewJs + "</script>") &&
+         Put(put, tail);
 }
 
 std::string Base64(const std::string& bytes) {
-  // libcrypto's encoder (linked for crypto.cpp); it takes an int length,
-  // so whole 3-byte groups go through a piece at a time.
-  constexpr size_t kPiece = size_t(3) << 20;
-  const size_t total = (bytes.size() + 2) / 3 * 4;
-  std::string out(total + 1, '\0');  // room for the NUL EVP_EncodeBlock ends with
-  size_t o = 0;
-  for (size_t i = 0; i < bytes.size(); i += kPiece) {
-    const size_t n = std::min(kPiece, bytes.size() - i);
-    o += size_t(EVP_EncodeBlock(reinterpret_cast<unsigned char*>(&out[o]),
-                                reinterpret_cast<const unsigned char*>(bytes.data() + i), int(n)));
-  }
-  out.resize(total);
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  const FileSink put = [&out](const char* data, size_t size) {
+    out.append(data, size);
+    return true;
+  };
+  Base64Writer writer(put);
+  writer.Add(bytes.data(), bytes.size());
+  writer.Finish();
   return out;
 }

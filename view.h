@@ -5,9 +5,11 @@
 #ifndef RADIOSITY_VIEW_H
 #define RADIOSITY_VIEW_H
 
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "files.h"
 #include "image.h"
 #include "results.h"
 #include "scene.h"
@@ -46,14 +48,22 @@ std::string ViewStateJson(const ViewInfo& info, const ViewState& state,
 // of the scene's box (in double) so that a scene far from its origin keeps
 // its detail.
 std::string ViewMeshBlob(const ShadedMesh& mesh, float exposure);
+// The same handed to `put` about a megabyte at a time (view.html of 10^6
+// elements is never held whole); false when `put` failed.
+bool ViewMeshBlob(const ShadedMesh& mesh, float exposure, const FileSink& put);
 
 // The live page (view.html with view.js in it): it asks the server for
 // state.json and mesh.bin.
 std::string ViewPage();
 
-// The same page with a state (ViewStateJson) and a mesh (ViewMeshBlob)
-// embedded: one file that shows them from file://, needing nothing else.
-std::string OfflineViewPage(const std::string& state_json, const std::string& mesh_blob);
+// The same page with a state (ViewStateJson) and a mesh embedded, handed
+// to `put` in pieces: one file that shows them from file://, needing
+// nothing else. `mesh_blob` hands a ViewMeshBlob's bytes to its sink (in
+// any pieces), which Base64-encodes them as they come. False when a write
+// failed.
+bool WriteOfflineViewPage(const std::string& state_json,
+                          const std::function<bool(const FileSink&)>& mesh_blob,
+                          const FileSink& put);
 
 // Base64 (RFC 4648, padded) of `bytes`.
 std::string Base64(const std::string& bytes);
