@@ -104,13 +104,14 @@ class Grouper {
     info_.resize(m_.patches.size());
     for (size_t p = 0; p < m_.patches.size(); ++p) {
       const Patch& pa = m_.patches[p];
+      const IdSpan tops = m_.Tops(int(p));
       const MeshFace& f = m_.faces[pa.face];
       PatchInfo& in = info_[p];
       in.c = pa.center;
       in.n = f.normal;
       in.offset = f.offset;
       in.lo = in.hi = pa.center;
-      for (int e : pa.elements) {
+      for (int e : tops) {
         const Element& el = m_.elems[e];
         for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
           if (std::find(in.corners.begin(), in.corners.end(), el.v[k]) == in.corners.end())

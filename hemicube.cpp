@@ -451,7 +451,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
   const glm::dvec3 c = group ? group->center : sp.center;
   const glm::dvec3 n = group ? group->normal : sf.normal;
   // Any tangent will do; the face's first edge keeps it stable per face.
-  const Element& e0 = mesh.elems[sp.elements[0]];
+  const Element& e0 = mesh.elems[size_t(mesh.Tops(shooter)[0])];
   glm::dvec3 t = mesh.verts[e0.v[1]] - mesh.verts[e0.v[0]];
   t = glm::normalize(t - n * glm::dot(t, n));
   glm::dvec3 b = glm::cross(n, t);

@@ -274,38 +274,40 @@ void Render(const ShadedMesh& mesh, const Camera& cam, int width, int height,
     return s;
   };
 
-  // Per vertex: whether it needs clipping, and (if not) its projection,
-  // shared by every polygon around it. The camera-space position is
-  // computed again where a polygon is clipped rather than kept for every
-  // vertex (40 bytes a vertex).
+  // Each polygon projects its own corners (the same numbers for a vertex
+  // from every polygon around it): a vertex is projected about twice, and
+  // no per-vertex arrays are made beside the mesh's (33 bytes a vertex,
+  // 70 MB at 10^6 elements, at the master's peak).
   const std::vector<glm::dvec3>& pos = mesh.positions();
   auto camera = [&](int i) {
     const glm::dvec3 r = pos[size_t(i)] - cam.eye;
     return ClipVert{{glm::dot(r, right), glm::dot(r, up), glm::dot(r, fwd)}, mesh.colors[size_t(i)]};
   };
-  const size_t nv = pos.size();
-  std::vector<ScreenVert> sv(nv);
-  std::vector<uint8_t> state(nv);  // 0 invalid, 1 needs clipping, 2 inside
-  for (size_t i = 0; i < nv; ++i) {
-    const ClipVert cv = camera(int(i));
-    if (!std::isfinite(cv.p.x) || !std::isfinite(cv.p.y) || !std::isfinite(cv.p.z)) continue;
-    bool inside = true;
-    for (int k = 0; k < Frustum::kPlanes; ++k) inside = inside && frustum.Dist(k, cv.p) >= 0;
-    state[i] = inside ? 2 : 1;
-    if (inside) sv[i] = project(cv);
-  }
 
   std::vector<float> depth(size_t(width) * height, 0.0f);
   const Target target{width, height, depth.data(), out->pixels.data()};
   for (const auto& q : mesh.polys) {
+    ClipVert cv[4];
+    ScreenVert sv[4];
+    uint8_t state[4];  // 0 invalid, 1 needs clipping, 2 inside
+    for (int k = 0; k < PolySize(q); ++k) {
+      cv[k] = camera(q[k]);
+      state[k] = 0;
+      if (!std::isfinite(cv[k].p.x) || !std::isfinite(cv[k].p.y) || !std::isfinite(cv[k].p.z))
+        continue;
+      bool inside = true;
+      for (int j = 0; j < Frustum::kPlanes; ++j) inside = inside && frustum.Dist(j, cv[k].p) >= 0;
+      state[k] = inside ? 2 : 1;
+      if (inside) sv[k] = project(cv[k]);
+    }
     for (int k = 1; k + 1 < PolySize(q); ++k) {
-      const int a = q[0], b = q[k], c = q[k + 1];
+      const int a = 0, b = k, c = k + 1;
       if (!state[a] || !state[b] || !state[c]) continue;
       if (state[a] == 2 && state[b] == 2 && state[c] == 2) {
         DrawTriangle(sv[a], sv[b], sv[c], target);
         continue;
       }
-      ClipVert buf[2][kMaxClipVerts] = {{camera(a), camera(b), camera(c)}, {}};
+      ClipVert buf[2][kMaxClipVerts] = {{cv[a], cv[b], cv[c]}, {}};
       int n = 3, cur = 0;
       for (int plane = 0; plane < Frustum::kPlanes && n >= 3; ++plane) {
         n = ClipPlane(frustum, plane, buf[cur], n, buf[1 - cur]);
@@ -330,27 +332,29 @@ float AutoExposure(const ShadedMesh& mesh) {
   constexpr double kPercentile = 0.95;
   constexpr double kWhite = 0.8;
   CheckPolys(mesh);
-  std::vector<double> weight(mesh.positions().size(), 0.0);
-  for (const auto& q : mesh.polys) {
-    const double a = PolyArea(mesh, q);
-    if (!std::isfinite(a)) continue;
-    for (int k = 0; k < PolySize(q); ++k) weight[q[k]] += a / PolySize(q);
-  }
-  // Reserved to the size it ends at: grown by doubling it took up to 32
-  // bytes a vertex, the master's largest allocation at the end of a run.
-  std::vector<std::pair<double, double>> lw;  // (luminance, weight)
-  lw.reserve(size_t(std::count_if(weight.begin(), weight.end(), [](double w) { return w > 0; })));
-  double total = 0, brightest = 0;
-  for (size_t i = 0; i < weight.size(); ++i) {
-    if (!(weight[i] > 0)) continue;
+  // (luminance, weight) per vertex, the weights summed in place and the
+  // vertices without any dropped: one array of 16 bytes a vertex (a
+  // weight array beside it took 24, the master's largest allocation at
+  // the end of a run).
+  std::vector<std::pair<double, double>> lw(mesh.positions().size());
+  for (size_t i = 0; i < lw.size(); ++i) {
     const glm::dvec3 c(mesh.colors[i]);
     double lum = 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
     if (!std::isfinite(lum) || lum < 0) lum = 0;
-    lw.emplace_back(lum, weight[i]);
-    total += weight[i];
+    lw[i] = {lum, 0.0};
+  }
+  for (const auto& q : mesh.polys) {
+    const double a = PolyArea(mesh, q);
+    if (!std::isfinite(a)) continue;
+    for (int k = 0; k < PolySize(q); ++k) lw[q[k]].second += a / PolySize(q);
+  }
+  lw.erase(std::remove_if(lw.begin(), lw.end(), [](const std::pair<double, double>& x) { return !(x.second > 0); }),
+           lw.end());
+  double total = 0, brightest = 0;
+  for (const auto& [lum, w] : lw) {
+    total += w;
     brightest = std::max(brightest, lum);
   }
-  std::vector<double>().swap(weight);
   std::sort(lw.begin(), lw.end());
   double level = 0, sum = 0;
   for (const auto& [lum, w] : lw) {

@@ -126,11 +126,17 @@ struct Builder {
   int epp;  // elements per patch edge
   FaceVerts* fv;
   std::unordered_map<long long, int> patch_of;  // coarse cell -> patch id
+  // The face's patches' top elements as they come (a face's elements
+  // interleave its patches), until Finish() lays them out in patch order.
+  std::vector<std::vector<int32_t>> tops;
+  int first_patch = -1;
 
   int PatchFor(long long key) {
     auto it = patch_of.find(key);
     if (it != patch_of.end()) return it->second;
     int id = int(m->patches.size());
+    if (first_patch < 0) first_patch = id;
+    tops.emplace_back();
     m->patches.emplace_back();
     m->patches.back().face = face;
     m->faces[face].patches.push_back(id);
@@ -145,8 +151,17 @@ struct Builder {
     if (!(e.area > 0)) return;  // a sliver of rounding; it receives nothing
     int patch = PatchFor(patch_key);
     e.patch = patch;
-    m->patches[patch].elements.push_back(int(m->elems.size()));
+    tops[size_t(patch - first_patch)].push_back(int32_t(m->elems.size()));
     m->elems.push_back(e);
+  }
+
+  void Finish() {
+    for (size_t i = 0; i < tops.size(); ++i) {
+      Patch& p = m->patches[size_t(first_patch) + i];
+      p.tops_at = int32_t(m->patch_tops.size());
+      p.tops = int32_t(tops[i].size());
+      m->patch_tops.insert(m->patch_tops.end(), tops[i].begin(), tops[i].end());
+    }
   }
 
   // Quad a,b,c,d (convex, planar) cut into nu x nv patches of epp x epp
@@ -288,7 +303,9 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
   for (const Surface& f : surfaces) {
     const Material& mat = scene.materials[f.material];
     MeshFace mf;
-    mf.scene_faces = f.faces;
+    mf.scene_at = int32_t(mesh->face_scene.size());
+    mf.scenes = int32_t(f.faces.size());
+    mesh->face_scene.insert(mesh->face_scene.end(), f.faces.begin(), f.faces.end());
     mf.normal = f.normal;
     mf.rho = mat.kd;
     mf.emission = mat.ke;
@@ -300,7 +317,7 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
 
     mesh->faces[face].vbegin = int(mesh->verts.size());
     fv.NextFace();
-    Builder b{mesh, face, epp, &fv, {}};
+    Builder b{mesh, face, epp, &fv, {}, {}, -1};
     const auto& v = f.poly;
     if (v.size() == 3) {
       double e = std::max({glm::length(v[1] - v[0]), glm::length(v[2] - v[1]),
@@ -320,12 +337,14 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
       for (size_t t = 0; t < tris.size(); ++t)
         b.Tri(v[tris[t][0]], v[tris[t][1]], v[tris[t][2]], n, (long long)t);
     }
+    b.Finish();
     mesh->faces[face].vend = int(mesh->verts.size());
   }
 
-  for (Patch& p : mesh->patches) {
+  for (size_t i = 0; i < mesh->patches.size(); ++i) {
+    Patch& p = mesh->patches[i];
     glm::dvec3 c(0.0);
-    for (int e : p.elements) {
+    for (int e : mesh->Tops(int(i))) {
       p.area += mesh->elems[e].area;
       c += mesh->elems[e].area * mesh->Centroid(e);
     }
@@ -356,7 +375,8 @@ void CollectLeaves(const std::vector<Element>& elems, std::vector<int> stack,
 }  // namespace
 
 void Mesh::Leaves(int patch, std::vector<int>* out) const {
-  CollectLeaves(elems, {patches[patch].elements.rbegin(), patches[patch].elements.rend()}, out);
+  const IdSpan tops = Tops(patch);
+  CollectLeaves(elems, {std::make_reverse_iterator(tops.end()), std::make_reverse_iterator(tops.begin())}, out);
 }
 
 void Mesh::LeavesUnder(int elem, std::vector<int>* out) const {
@@ -405,7 +425,7 @@ uint64_t MeshHash(const Mesh& mesh) {
     h = Mix(h, Bits(e.area));
   }
   for (const Patch& p : mesh.patches) {
-    h = Mix(h, Int(p.face) | uint64_t(p.elements.size()) << 32);
+    h = Mix(h, Int(p.face) | uint64_t(uint32_t(p.tops)) << 32);
     h = Mix(h, Bits(p.center.x));
     h = Mix(h, Bits(p.center.y));
     h = Mix(h, Bits(p.center.z));

@@ -52,9 +52,23 @@ struct Element {
   bool IsLeaf() const { return first_child < 0; }
 };
 
+// Ids in one of the mesh's flat arrays, [first, last): a patch's top
+// elements, a surface's scene faces (Mesh::Tops, Mesh::SceneFaces).
+struct IdSpan {
+  const int32_t* first = nullptr;
+  const int32_t* last = nullptr;
+  const int32_t* begin() const { return first; }
+  const int32_t* end() const { return last; }
+  size_t size() const { return size_t(last - first); }
+  int32_t operator[](size_t i) const { return first[i]; }
+};
+
 struct Patch {
   int face = -1;                 // index into Mesh::faces
-  std::vector<int> elements;     // its top-level elements
+  // Its top-level elements: Mesh::patch_tops[tops_at, tops_at + tops)
+  // (a range of one flat array rather than a vector a patch and its heap
+  // block: 48 bytes a patch less).
+  int32_t tops_at = 0, tops = 0;
   double area = 0.0;
   glm::dvec3 center{0.0};        // area centroid: where the hemicube sits
 };
@@ -62,7 +76,9 @@ struct Patch {
 // A surface (surface.h): one input face, or adjacent coplanar faces of
 // one material joined into a convex polygon.
 struct MeshFace {
-  std::vector<int> scene_faces;  // the Scene::faces it covers, ascending
+  // The Scene::faces it covers, ascending: Mesh::face_scene[scene_at,
+  // scene_at + scenes) (Mesh::SceneFaces).
+  int32_t scene_at = 0, scenes = 0;
   glm::dvec3 normal{0.0};
   glm::dvec3 rho{0.0};           // Kd
   glm::dvec3 emission{0.0};      // Ke
@@ -117,6 +133,11 @@ struct Mesh {
   std::vector<Element> elems;
   std::vector<Patch> patches;
   std::vector<MeshFace> faces;
+  // The patches' top elements, patch by patch (Patch::tops_at), and the
+  // surfaces' scene faces (MeshFace::scene_at). A split patch keeps its
+  // first slot for its first piece; its other pieces are appended.
+  std::vector<int32_t> patch_tops;
+  std::vector<int32_t> face_scene;
   double patch_size = 0.0;     // as used
   double scene_diagonal = 0.0; // bounding-box diagonal, the scene's scale
   // The corners of the input faces that joined into larger surfaces, for
@@ -155,6 +176,13 @@ struct Mesh {
 
   long LeafCount() const { return long(elems.size()) - divided; }
 
+  IdSpan Tops(int patch) const {
+    const Patch& p = patches[size_t(patch)];
+    return {patch_tops.data() + p.tops_at, patch_tops.data() + p.tops_at + p.tops};
+  }
+  IdSpan SceneFaces(const MeshFace& f) const {
+    return {face_scene.data() + f.scene_at, face_scene.data() + f.scene_at + f.scenes};
+  }
   // Leaf elements of a patch, in a stable order.
   void Leaves(int patch, std::vector<int>* out) const;
   // Leaf elements under element `elem` (itself when it is a leaf).

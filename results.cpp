@@ -44,7 +44,8 @@ std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::d
   std::vector<glm::dvec3> out(mesh.corner_begin.size() - 1, glm::dvec3(0.0));
   std::vector<int> leaves;
   for (const MeshFace& mf : mesh.faces) {
-    if (mf.scene_faces.size() == 1) {  // all its leaves, in patch order
+    const IdSpan scene_faces = mesh.SceneFaces(mf);
+    if (scene_faces.size() == 1) {  // all its leaves, in patch order
       glm::dvec3 sum(0.0);
       double area = 0;
       for (int p : mf.patches) {
@@ -54,7 +55,7 @@ std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::d
           area += mesh.elems[e].area;
         }
       }
-      if (area > 0) out[mf.scene_faces[0]] = glm::max(sum / area, glm::dvec3(0.0));
+      if (area > 0) out[scene_faces[0]] = glm::max(sum / area, glm::dvec3(0.0));
       continue;
     }
     // A joined surface: each face gets the leaves' overlap with it, found
@@ -66,7 +67,7 @@ std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::d
     };
     std::vector<Top> tops;
     for (int p : mf.patches)
-      for (int e : mesh.patches[p].elements) {
+      for (int e : mesh.Tops(p)) {
         const Element& el = mesh.elems[e];
         Top t{e, glm::dvec2(HUGE_VAL), glm::dvec2(-HUGE_VAL)};
         for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
@@ -77,7 +78,7 @@ std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::d
         tops.push_back(t);
       }
     std::vector<glm::dvec2> clip;
-    for (int f : mf.scene_faces) {
+    for (int f : scene_faces) {
       clip.clear();
       glm::dvec2 lo(HUGE_VAL), hi(-HUGE_VAL);
       for (int c = mesh.corner_begin[f]; c < mesh.corner_begin[f + 1]; ++c) {
@@ -274,6 +275,16 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   ShadedMesh s;
   s.lent = &mesh.verts;
   std::vector<int> t_leaves;  // leaves with T-vertices on their edges
+  // Polygons counted first and reserved: grown by doubling they took up
+  // to three times their 16 bytes an element while it grew.
+  size_t npolys = 0;
+  for (const Element& el : mesh.elems) {
+    if (!el.IsLeaf()) continue;
+    int out[8];
+    const int m = Outline(el, out);
+    npolys += m == (el.IsTriangle() ? 3 : 4) ? 1 : size_t(m - 2);
+  }
+  s.polys.reserve(npolys);
   for (size_t e = 0; e < mesh.elems.size(); ++e) {
     const Element& el = mesh.elems[e];
     if (!el.IsLeaf()) continue;
@@ -490,9 +501,9 @@ void FieldError(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const M
     const MeshFace& face = mesh.faces[size_t(ref.patches[rel.patch].face)];
     int e = -1;
     for (size_t i = 0; i < face.patches.size() && e < 0; ++i)
-      for (int top : mesh.patches[size_t(face.patches[i])].elements)
+      for (int top : mesh.Tops(face.patches[i]))
         if (inside(top, x, n)) { e = top; break; }
-    if (e < 0) e = mesh.patches[size_t(face.patches[0])].elements[0];  // rounding at an edge
+    if (e < 0) e = mesh.Tops(face.patches[0])[0];  // rounding at an edge
     while (!mesh.elems[e].IsLeaf()) {
       int next = mesh.elems[e].first_child;
       for (int k = 0; k < kChildren; ++k)

@@ -473,7 +473,8 @@ void Solver::Split(int p) {
     area_[size_t(q)] = mesh_.patches[size_t(q)].area;
     center_[size_t(q)] = mesh_.patches[size_t(q)].center;
     weight_[size_t(q)] = area_[size_t(q)] * std::max({face.rho.r, face.rho.g, face.rho.b});
-    std::vector<int> stack(mesh_.patches[size_t(q)].elements);
+    const IdSpan tops = mesh_.Tops(q);
+    std::vector<int> stack(tops.begin(), tops.end());
     while (!stack.empty()) {
       const int e = stack.back();
       stack.pop_back();

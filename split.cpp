@@ -11,9 +11,9 @@ namespace {
 // The top elements the pieces of `patch` would have.
 void PieceTops(const Mesh& m, int patch, std::vector<int>* tops) {
   tops->clear();
-  const std::vector<int>& el = m.patches[size_t(patch)].elements;
+  const IdSpan el = m.Tops(patch);
   if (el.size() > 1) {
-    *tops = el;
+    tops->assign(el.begin(), el.end());
   } else if (el.size() == 1 && !m.elems[size_t(el[0])].IsLeaf()) {
     for (int k = 0; k < kChildren; ++k) tops->push_back(m.elems[size_t(el[0])].first_child + k);
   }
@@ -57,7 +57,14 @@ void SplitPatch(Mesh* mesh, int patch) {
     // As BuildMesh makes a patch: its top elements' areas and centroids.
     Patch& p = mesh->patches[size_t(id)];
     p.face = face;
-    p.elements.assign(1, tops[i]);
+    // One top element: the first piece in the patch's first slot, the
+    // others in slots appended.
+    if (i > 0) {
+      p.tops_at = int32_t(mesh->patch_tops.size());
+      mesh->patch_tops.push_back(tops[i]);
+    }
+    mesh->patch_tops[size_t(p.tops_at)] = tops[i];
+    p.tops = 1;
     p.area = mesh->elems[size_t(tops[i])].area;
     p.center = mesh->Centroid(tops[i]);
     MoveTo(mesh, tops[i], id);

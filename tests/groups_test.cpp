@@ -63,10 +63,10 @@ TEST(Groups, TilesOfOneFloorShootTogether) {
     glm::dvec3 lo(1e9), hi(-1e9);
     double nearest = 1e9;
     for (int q : g.members) {
-      EXPECT_EQ(m.patches[q].elements.size(), 4u);  // a tile, not a wall patch
+      EXPECT_EQ(m.Tops(q).size(), 4u);  // a tile, not a wall patch
       EXPECT_GT(to_wall(m.patches[q].center), 0.1);  // not along a wall
       nearest = std::min(nearest, to_wall(m.patches[q].center));
-      for (int e : m.patches[q].elements)
+      for (int e : m.Tops(q))
         for (int k = 0; k < 4; ++k) {
           lo = glm::min(lo, m.verts[m.elems[e].v[k]]);
           hi = glm::max(hi, m.verts[m.elems[e].v[k]]);

@@ -23,7 +23,7 @@ double LeafArea(const Mesh& m, int face) {
 double MaxEdge(const Mesh& m, int patch) {
   // Extent of a patch: the largest distance between two of its corners.
   std::vector<glm::dvec3> pts;
-  for (int e : m.patches[patch].elements)
+  for (int e : m.Tops(patch))
     for (int k = 0; k < (m.elems[e].IsTriangle() ? 3 : 4); ++k) pts.push_back(m.verts[m.elems[e].v[k]]);
   double d = 0;
   for (const auto& a : pts)
@@ -41,7 +41,7 @@ TEST(Mesh, DefaultRuleCutsToADiagonalSixteenth) {
   EXPECT_EQ(m.elems.size(), 6u * 400);
   for (size_t p = 0; p < m.patches.size(); ++p) {
     EXPECT_LE(MaxEdge(m, int(p)), m.patch_size * std::sqrt(2.0) + 1e-12);
-    EXPECT_EQ(m.patches[p].elements.size(), 4u);
+    EXPECT_EQ(m.Tops(p).size(), 4u);
   }
 }
 

@@ -37,8 +37,9 @@ double Sum(const std::vector<glm::dvec3>& unshot, const Mesh& m, int c) {
 TEST(Split, PiecesAreTheTopElementsThenTheirChildren) {
   Mesh m = MakeMesh(Floor(), Coarse());
   const size_t patches = m.patches.size();
-  ASSERT_EQ(m.patches[0].elements.size(), 4u);
-  const std::vector<int> tops = m.patches[0].elements;
+  ASSERT_EQ(m.Tops(0).size(), 4u);
+  const IdSpan span = m.Tops(0);
+  const std::vector<int> tops(span.begin(), span.end());
   const double area = m.patches[0].area;
   Divide(&m, tops[1]);  // divided before the split: its children follow it
   ASSERT_EQ(SplitPieces(m, 0), 4);
@@ -47,7 +48,7 @@ TEST(Split, PiecesAreTheTopElementsThenTheirChildren) {
   EXPECT_EQ(m.splits, (std::vector<int32_t>{0}));
   double sum = 0;
   for (int p : {0, int(patches), int(patches) + 1, int(patches) + 2}) {
-    ASSERT_EQ(m.patches[p].elements.size(), 1u);
+    ASSERT_EQ(m.Tops(p).size(), 1u);
     sum += m.patches[p].area;
     std::vector<int> leaves;
     m.Leaves(p, &leaves);
@@ -71,7 +72,7 @@ TEST(Split, ReplayedInAnyInterleavingGivesTheSameMesh) {
   const Mesh built = MakeMesh(Floor(), Coarse());
   Mesh m = built;
   SplitPatch(&m, 1);
-  Divide(&m, m.patches[1].elements[0]);
+  Divide(&m, m.Tops(1)[0]);
   SplitPatch(&m, 1);
   Divide(&m, 3);
   SplitPatch(&m, 2);
@@ -132,7 +133,7 @@ TEST(Split, SolverKeepsTheUnshotPower) {
   int brightest = -1, richest = -1;
   double bb = -1, rb = -1;
   for (int q : pieces) {
-    const int e = m.patches[q].elements[0];
+    const int e = m.Tops(q)[0];
     if (solver.radiosity()[e].r > bb) bb = solver.radiosity()[e].r, brightest = q;
     if (solver.unshot()[q].r > rb) rb = solver.unshot()[q].r, richest = q;
   }
@@ -154,17 +155,17 @@ TEST(Split, PolicySplitsUnevenPatchesOnly) {
   so.split = true;
   Subdivider sub(&m, so);
   std::vector<glm::dvec3> b(m.elems.size(), glm::dvec3(1.0));
-  b[size_t(m.patches[2].elements[0])] = glm::dvec3(0.2);  // patch 2: one dark piece
-  b[size_t(m.patches[1].elements[3])] = glm::dvec3(0.8);  // patch 1: a little uneven
+  b[size_t(m.Tops(2)[0])] = glm::dvec3(0.2);  // patch 2: one dark piece
+  b[size_t(m.Tops(1)[3])] = glm::dvec3(0.8);  // patch 1: a little uneven
   for (int p : m.faces[1].patches)  // the light: uneven, never split
-    b[size_t(m.patches[p].elements[0])] = glm::dvec3(0.0);
+    b[size_t(m.Tops(p)[0])] = glm::dvec3(0.0);
   sub.Pass(m, b, {}, glm::dvec3(0.0), 100, {});
   EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {}, {}), (std::vector<int32_t>{2}));
   SplitPatch(&m, 2);  // into pieces of one leaf each: none splits again
   // Measured again only where a leaf changed: patch 1, now darker there.
-  b[size_t(m.patches[1].elements[3])] = glm::dvec3(0.3);
+  b[size_t(m.Tops(1)[3])] = glm::dvec3(0.3);
   EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {}, {}), (std::vector<int32_t>{}));
-  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {m.patches[1].elements[3]}, {}),
+  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {m.Tops(1)[3]}, {}),
             (std::vector<int32_t>{1}));
   EXPECT_EQ(sub.splits(), 2);
   EXPECT_EQ(sub.State().split_threshold, so.split_floor);  // 0.6 · 0.7 < 0.5
