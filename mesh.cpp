@@ -254,7 +254,7 @@ MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts) {
 }
 
 bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
-               std::string* err) {
+               std::string* err, const std::function<void()>& read) {
   *mesh = Mesh();
   mesh->scene_diagonal = glm::length(scene.hi - scene.lo);
   mesh->patch_size = opts.patch_size > 0 ? opts.patch_size : mesh->scene_diagonal / 16;
@@ -299,6 +299,7 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
     mesh->corner_begin[i + 1] += mesh->corner_begin[i];
   }
 
+  if (read) read();
   FaceVerts fv(&mesh->verts);
   for (const Surface& f : surfaces) {
     const Material& mat = scene.materials[f.material];

@@ -22,6 +22,7 @@
 #include <array>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -193,8 +194,13 @@ struct Mesh {
 
 // Builds the mesh. Fails (false, *err) only when limits are exceeded, e.g.
 // the element count a patch size implies is larger than kMaxElements.
+// `read`, when given, is called once BuildMesh has read the faces'
+// vertices (the surfaces are made, their corners copied) and before any
+// element is made: from then on it reads only the scene's materials, so a
+// caller done with the vertices may free them there (the worker does:
+// its peak is the mesh built beside the scene).
 bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
-               std::string* err);
+               std::string* err, const std::function<void()>& read = nullptr);
 
 // The elements and vertices BuildMesh would make at most (before making
 // any): a face's extent over the patch size, cut as BuildMesh cuts it.

@@ -233,7 +233,12 @@ int Worker::Run(std::string* err) {
   std::string().swap(payload);
   if (!FitsInMemory(EstimateMesh(setup.scene, setup.mesh).elements, kWorkerBytesPerElement,
                     UsableMemory(), &why) ||
-      !BuildMesh(setup.scene, setup.mesh, &mesh_, &why))
+      !BuildMesh(setup.scene, setup.mesh, &mesh_, &why, [&setup] {
+        // The vertices (some 50 bytes an element, in as many blocks as
+        // faces) go back to the system before the elements are made.
+        DropVertices(&setup.scene);
+        malloc_trim(0);
+      }))
     return Fail(why, err);
   // Only the mesh is needed from here on: the scene (100-200 bytes a face)
   // is let go rather than kept for the whole run.
