@@ -12,11 +12,12 @@
 
 // The master: mesh, solver, subdivision's adjacency, the hemicube (-j 0)
 // or the scene frame (with workers), the pictures at the end of a wave
-// (measured 432 with -j 0, 459 with -j 1, at 1.06 M elements).
-constexpr double kMasterBytesPerElement = 530;
+// (measured 413 with -j 0, 367 with -j 1, at 1.06 M elements; room left
+// for a few bytes an element more and for scenes that mesh less evenly).
+constexpr double kMasterBytesPerElement = 470;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
-// (measured 305).
-constexpr double kWorkerBytesPerElement = 350;
+// (measured 288).
+constexpr double kWorkerBytesPerElement = 330;
 
 // Bytes this process may still use: physical memory, or less where
 // ulimit -v / -d or a cgroup's memory.max says so.

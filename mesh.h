@@ -209,9 +209,8 @@ struct MeshEstimate {
 };
 MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts);
 
-// The most elements a mesh may have, built or divided. A run needs about
-// 0.85 KB per element (1.2 KB with subdivision's edge maps; measured on a
-// 200,709-face scene by bench/stiff.sh), so this is about 9 GB.
+// The most elements a mesh may have, built or divided. The master needs
+// about 0.4 KB per element (memory.h), so this is about 3.5 GB.
 constexpr int kMaxElements = 8'000'000;
 
 // Geometry shared by building (mesh.cpp) and division (divide.cpp).

@@ -109,6 +109,12 @@ TEST(View, PagesCarryTheScriptAndTheOfflineOneTheData) {
             std::string::npos);
   EXPECT_NE(page.find("<script id=\"radiosity-mesh\" type=\"application/octet-stream\">YWJjZGVmZ2g=</script>"),
             std::string::npos);
+  // A write that fails stops the page there and says so.
+  size_t calls = 0;
+  EXPECT_FALSE(WriteOfflineViewPage(
+      "{}", [](const FileSink& put) { return put("abc", 3) && put("def", 3); },
+      [&calls](const char*, size_t) { return ++calls < 2; }));
+  EXPECT_EQ(calls, 2u);
   // Nothing from the network.
   for (const char* net : {"http://", "https://", "src=\"//"}) EXPECT_EQ(page.find(net), std::string::npos) << net;
 }
