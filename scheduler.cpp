@@ -29,7 +29,7 @@ bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wa
   // Shooter division: a split of patch p travels as the edit ~p, after
   // the pass's divisions (doc/protocol.txt, divide).
   const std::vector<int32_t> splits =
-      subdivider->SplitPass(*mesh, solver->radiosity(), solver->Ambient(), *changed, *edits);
+      subdivider->SplitPass(*mesh, solver->direct(), solver->DirectDone());
   for (int32_t p : splits) {
     SplitPatch(mesh, p);
     solver->Split(p);
@@ -106,6 +106,8 @@ class Scheduler {
     }
     // The dividing factor discounts the hemicube's noise (subdivide.h).
     if (sub) solver->TrackNoise(opts.resolution);
+    // Shooter division measures the emitters' first light (split.cpp).
+    if (sub && sub->splitting()) solver->TrackDirect();
   }
   RunResult Run();
 
