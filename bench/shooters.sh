@@ -1,8 +1,7 @@
 #!/bin/sh
-# Shooter division (on by default, --no-split; man page, SUBDIVISION): a
-# cube on a table top under a ceiling light (bench/make_table.py). The
-# cube's and the table top's mean red radiosity, default against
-# --no-split, each against a
+# Shooter division (--split; man page, SUBDIVISION): a cube on a table top
+# under a ceiling light (bench/make_table.py). The cube's and the table
+# top's mean red radiosity, default against --split, each against a
 # reference with patches REF_DIV times smaller (default 4) and one element
 # per patch, to -e 1e-4, and the reference's own refinement (2 x REF_DIV)
 # when REFINE=1 (hours on a loaded machine). Prints a Markdown table.
@@ -48,4 +47,4 @@ if [ "${REFINE:-0}" = 1 ]; then
   row "its refinement (patches / $((2 * REF_DIV)))" "$(run fine -e 1e-4 --patch-size "$(awk -v p="$P" -v k="$REF_DIV" 'BEGIN { print p / k / 2 }')" --elements 1)"
 fi
 row "default" "$(run default)"
-row "--no-split" "$(run nosplit --no-split)"
+row "--split" "$(run split --split)"
