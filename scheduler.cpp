@@ -19,13 +19,16 @@ namespace {
 bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wave,
             std::vector<int32_t>* changed, std::vector<int32_t>* edits) {
   edits->clear();
-  if (!subdivider->Due(shots_in_wave)) return false;
+  const bool due = subdivider->Due(shots_in_wave);
+  if (!due && !subdivider->SplitDue(solver->DirectDone())) return false;
   const double t0 = ThreadCpuSeconds();
-  solver->TakeChanged(changed);
-  *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->noise(), solver->Ambient(),
-                            shots_in_wave, *changed);
-  for (int32_t e : *edits) Divide(mesh, e);
-  solver->Divided(*edits);
+  if (due) {
+    solver->TakeChanged(changed);
+    *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->noise(), solver->Ambient(),
+                              shots_in_wave, *changed);
+    for (int32_t e : *edits) Divide(mesh, e);
+    solver->Divided(*edits);
+  }
   // Shooter division: a split of patch p travels as the edit ~p, after
   // the pass's divisions (doc/protocol.txt, divide).
   const std::vector<int32_t> splits =
@@ -36,7 +39,8 @@ bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wa
     edits->push_back(~p);
   }
   subdivider->CountTime(ThreadCpuSeconds() - t0);
-  return subdivider->WaveOver();
+  // Splits alone (subdivision over) do not start a wave.
+  return due && subdivider->WaveOver();
 }
 
 // A worker as the scheduler keeps it (paper §4.1): the patches sent and

@@ -47,8 +47,7 @@
 // in one shot, and even a full shadow edge there is at the limit.
 //
 // Shooter division (SplitPass, split.cpp) is led alike, at the same
-// passes: a patch of several top elements (BuildMesh's) is split into
-// patches of one each (SplitPatch) when
+// passes: a patch is split into patches, one a piece (SplitPatch), when
 //
 //  * its light is uneven: it shoots from its centre light that really
 //    leaves from its bright part (a table top round the contact shadow of
@@ -57,23 +56,22 @@
 //    depends on the mesh only and not on the order in which columns come
 //    back, so that every -j splits alike), once every emitter has shot:
 //
-//      (max_i D_i - min_i D_i) / (max_i D_i + Kd·A0 + 0.2 × mean D of the lit scene)
+//      (max_i D_i - min_i D_i) / (max_i D_i + 0.2 × mean D of the lit scene)
 //
-//    over its top elements' area-weighted mean direct luminance D_i, where
-//    A0 is the ambient estimate before any shot (Solver::FirstAmbient(),
-//    a constant of the scene: the light the rest of the run will add,
-//    which fills a shadow in)
+//    over its pieces' (SplitPieces: its top elements, or its one top
+//    element's children) area-weighted mean direct luminance D_i
 //    exceeds the split threshold, lowered by `decay` every pass from then
-//    on down to split_floor; or
+//    on down to split_floor (measured once a wave even when no division
+//    pass is due any more, SplitDue: a later wave's first light tells
+//    apart the children of elements divided before it); or
 //  * its receivers are close: a top element of another face, in front of
 //    it and facing it, has its centroid nearer than split_near × the
 //    patch's width (√area) to the patch's centre, where the hemicube at
-//    the centre misjudges how it sees the patch (geometry only: at the
-//    first pass).
+//    the centre misjudges how it sees the patch (geometry: at the first
+//    pass, and for the pieces of a split at the pass after).
 //
-// Pieces of one top element are not split again (a split of its
-// children would follow element divisions, which do depend on the order
-// of shots). Emitters are never split (their light is their own, not
+// Splits of children follow element divisions, which the order of shots
+// moves a little. Emitters are never split (their light is their own, not
 // received), nor members of shooter groups (groups.h).
 #ifndef RADIOSITY_SUBDIVIDE_H
 #define RADIOSITY_SUBDIVIDE_H
@@ -164,6 +162,9 @@ class Subdivider {
                                  bool direct_done);
   long splits() const { return splits_; }
   bool splitting() const { return opts_.split; }
+  // A wave's first light is complete and not yet measured: SplitPass is
+  // due even where no division pass is (Due), as after the last one.
+  bool SplitDue(bool direct_done) const { return opts_.split && direct_done && !measured_; }
 
   // Leaves whose factor the last pass computed.
   long evaluated() const { return evaluated_; }
