@@ -34,6 +34,12 @@ class In {
   uint32_t U32() { return uint32_t(Get(4)); }
   int32_t I32() { return int32_t(uint32_t(Get(4))); }
   int64_t I64() { return int64_t(Get(8)); }
+  float F32() {
+    const uint32_t bits = U32();
+    float f;
+    std::memcpy(&f, &bits, 4);
+    return f;
+  }
   double F64() {
     double d = 0;
     r_.F64(&d, "f64");
@@ -90,6 +96,7 @@ void PutOptions(std::string* w, const SolveOptions& o) {
   PutU8(w, o.sub.split);
   PutF64(w, o.sub.split_threshold);
   PutF64(w, o.sub.split_floor);
+  PutF64(w, o.sub.split_near);
 }
 
 SolveOptions GetOptions(In* r) {
@@ -116,6 +123,7 @@ SolveOptions GetOptions(In* r) {
   o.sub.split = r->Bool();
   o.sub.split_threshold = r->F64();
   o.sub.split_floor = r->F64();
+  o.sub.split_near = r->F64();
   return o;
 }
 
@@ -147,6 +155,10 @@ std::string Implausible(const Checkpoint& k) {
     return "the noise array does not match the element count";
   for (double x : s.noise)
     if (!(x >= 0) || !std::isfinite(x)) return "a noise variance that is not a finite number >= 0";
+  if (!s.direct.empty() && s.direct.size() != k.elements)
+    return "the direct light array does not match the element count";
+  for (float x : s.direct)
+    if (!(x >= 0) || !std::isfinite(x)) return "a direct light that is not a finite number >= 0";
   if (!finite(s.unshot_sum) || !std::isfinite(s.abs_sum)) return "unshot sums not finite";
   if (s.shots < 0) return "a negative shot count";
   for (size_t p = 0; p < k.patches; ++p)
@@ -337,6 +349,7 @@ std::string EncodeCheckpoint(const Checkpoint& c) {
   PutArray(&w, s.blind, [&](uint8_t x) { PutU8(&w, x); });
   PutArray(&w, s.times_shot, [&](int32_t x) { PutFixed32(&w, x); });
   PutArray(&w, s.noise, [&](double x) { PutF64(&w, x); });
+  PutArray(&w, s.direct, [&](float x) { PutF32(&w, x); });
   PutU8(&w, c.has_subdivider);
   if (c.has_subdivider) {
     const SubdividerState& d = c.subdivider;
@@ -423,6 +436,8 @@ bool DecodeCheckpoint(const std::string& bytes, Checkpoint* c, std::string* err)
   for (int32_t& x : s.times_shot) x = r.I32();
   s.noise.resize(r.Count(8));
   for (double& x : s.noise) x = r.F64();
+  s.direct.resize(r.Count(4));
+  for (float& x : s.direct) x = r.F32();
   k.has_subdivider = r.Bool();
   if (k.has_subdivider) {
     SubdividerState& d = k.subdivider;
@@ -527,6 +542,8 @@ std::string CompareOptions(const SolveOptions& a, const SolveOptions& b) {
   if (a.sub.split != b.sub.split) return flag("--split", a.sub.split, b.sub.split);
   if (a.sub.split && a.sub.split_floor != b.sub.split_floor)
     return differ("--split-floor", num(a.sub.split_floor), num(b.sub.split_floor));
+  if (a.sub.split && a.sub.split_near != b.sub.split_near)
+    return differ("--split-near", num(a.sub.split_near), num(b.sub.split_near));
   if (a.sub.split_threshold != b.sub.split_threshold || a.sub.threshold != b.sub.threshold ||
       a.sub.decay != b.sub.decay ||
       a.sub.between != b.sub.between || a.sub.quiet != b.sub.quiet)

@@ -6,11 +6,11 @@
 // on; with -j 0 it then makes the same shots as the run it continues, bit
 // for bit.
 //
-// File format, version 3; integers little-endian, f64 IEEE 754 bits:
+// File format, version 4; integers little-endian, f64 IEEE 754 bits:
 //
 //   offset  size  field
 //   0       8     magic "RADCKPT\n"
-//   8       4     u32 version (3)
+//   8       4     u32 version (4)
 //   12      4     u32 reserved, 0
 //   16      8     u64 N: payload length
 //   24      N     payload
@@ -29,13 +29,14 @@
 //             groups, f64 group size, u8 subdivide, f64 threshold, f64 floor, f64 decay, f64
 //             min_size, i32 max_level, u8 waves, f64 wave_fraction,
 //             i64 between, f64 quiet, u8 split, f64 split_threshold,
-//             f64 split_floor
+//             f64 split_floor, f64 split_near
 //   edits     ARRAY<i32>: the elements divided, in the order Divide() ran,
 //             then ~p for each patch p split, in the order SplitPatch() ran
 //   solver    i64 shots, vec unshot_sum, f64 abs_sum, ARRAY<vec> B per
 //             element, ARRAY<vec> unshot per patch, ARRAY<u8> lit,
 //             ARRAY<u8> blind, ARRAY<i32> times shot, ARRAY<f64> noise
-//             per element (empty when the run does not divide)
+//             per element (empty when the run does not divide), ARRAY<f32>
+//             direct light per element (empty when it does not split)
 //   subdiv    u8 present; if 1: f64 threshold, i64 last_pass, i64
 //             wave_start_leaves, i64 divided_in_wave, u8 finished, u8
 //             quiet, i64 passes, f64 seconds, f64 split_threshold, i64
@@ -59,7 +60,7 @@
 #include "scene.h"
 #include "subdivide.h"
 
-constexpr uint32_t kCheckpointVersion = 3;
+constexpr uint32_t kCheckpointVersion = 4;
 
 // The options that shape the answer: a checkpoint is resumed only with
 // the same ones.

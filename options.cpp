@@ -125,10 +125,12 @@ const char kUsage[] =
     "      --min-element L    smallest element edge made by dividing (default: diagonal / 400)\n"
     "      --max-level N      deepest division below the built elements, 0..12 (default 2)\n"
     "      --wave-fraction F  a new wave after F of the elements divided (default 0.2)\n"
-    "      --split            split shooter patches whose pieces differ strongly in\n"
-    "                         radiosity (default: patches stay as built)\n"
+    "      --split            split shooter patches lit unevenly or with receivers\n"
+    "                         close (default: --no-split, patches stay as built)\n"
     "      --split-floor F    lowest shooter-division threshold, implies --split\n"
-    "                         (default 0.5)\n"
+    "                         (default 0.8)\n"
+    "      --split-near K     split a patch with receivers nearer than K times its\n"
+    "                         width, 0: never; implies --split (default 0.35)\n"
     "      --no-rotate        keep the hemicube aligned (default: turned per shot)\n"
     "      --seed N           seed of the hemicube turns (default 1)\n"
     "      --log-every N      shots between log.csv rows (default: patches / 100)\n"
@@ -156,6 +158,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
     kNoJoin, kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
     kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect, kConverge,
     kCheckpoint, kCheckpointEvery, kResume, kNoGroups, kGroupSize, kView, kSplit, kSplitFloor,
+    kNoSplit, kSplitNear,
   };
   static const option kLong[] = {
       {"out", required_argument, nullptr, 'o'},
@@ -188,6 +191,8 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       {"subdivide-floor", required_argument, nullptr, kFloor},
       {"split", no_argument, nullptr, kSplit},
       {"split-floor", required_argument, nullptr, kSplitFloor},
+      {"no-split", no_argument, nullptr, kNoSplit},
+      {"split-near", required_argument, nullptr, kSplitNear},
       {"min-element", required_argument, nullptr, kMinElement},
       {"max-level", required_argument, nullptr, kMaxLevel},
       {"wave-fraction", required_argument, nullptr, kWaveFraction},
@@ -213,6 +218,8 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   bool quiet = false, verbose = false, no_subdivide = false, no_waves = false;
   bool wave_fraction = false;
   std::string subdivide_limit;  // the last of --subdivide-floor, --min-element, --max-level, --split-floor
+  std::string split_given;      // the last of --split-floor, --split-near
+  bool no_split = false;
   std::string& secret_file = o.secret_file;
   opterr = 0;
   optind = 0;  // glibc: start afresh, so that a second call parses its own argv
@@ -277,10 +284,16 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
         subdivide_limit = "--subdivide-floor";
         break;
       case kSplit: o.sub.split = true; break;
+      case kNoSplit: no_split = true; break;
+      case kSplitNear:
+        ok = Number("--split-near", optarg, 0, 100, &o.sub.split_near, err);
+        subdivide_limit = split_given = "--split-near";
+        o.sub.split = true;
+        break;
       case kSplitFloor:
         ok = Number("--split-floor", optarg, 1e-3, 100, &o.sub.split_floor, err);
+        subdivide_limit = split_given = "--split-floor";
         o.sub.split = true;
-        subdivide_limit = "--split-floor";
         break;
       case kMinElement:
         ok = Number("--min-element", optarg, 1e-300, 1e300, &o.sub.min_size, err);
@@ -327,6 +340,9 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   if (quiet && verbose) clash = "-q and -v contradict each other";
   else if (no_subdivide && !subdivide_limit.empty())
     clash = subdivide_limit + " limits dividing, and --no-subdivide divides nothing";
+  else if (no_split && o.sub.split)
+    clash = (split_given.empty() ? std::string("--split") : split_given) +
+            " splits shooters, and --no-split splits none";
   else if (wave_fraction && (no_subdivide || no_waves))
     clash = "--wave-fraction starts waves, and " +
             std::string(no_subdivide ? "--no-subdivide" : "--no-waves") + " has none";

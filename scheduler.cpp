@@ -19,24 +19,28 @@ namespace {
 bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wave,
             std::vector<int32_t>* changed, std::vector<int32_t>* edits) {
   edits->clear();
-  if (!subdivider->Due(shots_in_wave)) return false;
+  const bool due = subdivider->Due(shots_in_wave);
+  if (!due && !subdivider->SplitDue(solver->DirectDone())) return false;
   const double t0 = ThreadCpuSeconds();
-  solver->TakeChanged(changed);
-  *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->noise(), solver->Ambient(),
-                            shots_in_wave, *changed);
-  for (int32_t e : *edits) Divide(mesh, e);
-  solver->Divided(*edits);
+  if (due) {
+    solver->TakeChanged(changed);
+    *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->noise(), solver->Ambient(),
+                              shots_in_wave, *changed);
+    for (int32_t e : *edits) Divide(mesh, e);
+    solver->Divided(*edits);
+  }
   // Shooter division: a split of patch p travels as the edit ~p, after
   // the pass's divisions (doc/protocol.txt, divide).
   const std::vector<int32_t> splits =
-      subdivider->SplitPass(*mesh, solver->radiosity(), solver->Ambient(), *changed, *edits);
+      subdivider->SplitPass(*mesh, solver->direct(), solver->DirectDone());
   for (int32_t p : splits) {
     SplitPatch(mesh, p);
     solver->Split(p);
     edits->push_back(~p);
   }
   subdivider->CountTime(ThreadCpuSeconds() - t0);
-  return subdivider->WaveOver();
+  // Splits alone (subdivision over) do not start a wave.
+  return due && subdivider->WaveOver();
 }
 
 // A worker as the scheduler keeps it (paper §4.1): the patches sent and
@@ -106,6 +110,8 @@ class Scheduler {
     }
     // The dividing factor discounts the hemicube's noise (subdivide.h).
     if (sub) solver->TrackNoise(opts.resolution);
+    // Shooter division measures the emitters' first light (split.cpp).
+    if (sub && sub->splitting()) solver->TrackDirect();
   }
   RunResult Run();
 

@@ -8,6 +8,7 @@
 
 namespace {
 double Abs(const glm::dvec3& u) { return std::abs(u.r) + std::abs(u.g) + std::abs(u.b); }
+double Lum(const glm::dvec3& u) { return (u.r + u.g + u.b) / 3; }
 
 // The delta form factor, at most, of a hemicube pixel seen cos_a off the
 // shooter's normal, for one whose top-centre pixel has pixel_ff (the
@@ -87,6 +88,7 @@ void Solver::NewWave() {
   Grow();
   for (size_t e = 0; e < b_.size(); ++e) b_[e] = mesh_.FaceOf(int(e)).emission;
   if (pixel_ff_ > 0) noise_.assign(b_.size(), 0.0);
+  if (track_direct_) direct_.assign(b_.size(), 0.0f);
   unshot_.resize(mesh_.patches.size());
   lit_.resize(mesh_.patches.size());
   for (size_t p = 0; p < unshot_.size(); ++p) {
@@ -94,8 +96,25 @@ void Solver::NewWave() {
     lit_[p] = Abs(unshot_[p]) > 0;
   }
   times_shot_.assign(mesh_.patches.size(), 0);
+  CountDarkEmitters();
   Resum();
   Rebase();
+}
+
+// The emitting shooters (a group's members summed) that can still shoot
+// and have not in this wave: DirectDone() once none is left.
+void Solver::CountDarkEmitters() {
+  dark_emitters_ = 0;
+  for (size_t p = 0; p < unshot_.size(); ++p) {
+    if (blind_[p] || times_shot_[p] > 0 || !IsShooter(mesh_, int(p))) continue;
+    const PatchGroup* g = GroupOf(mesh_, int(p));
+    const int single[1] = {int(p)};
+    const int* members = g ? g->members.data() : single;
+    double ke = 0;
+    for (size_t i = 0; i < (g ? g->members.size() : 1); ++i)
+      ke += Abs(mesh_.faces[mesh_.patches[size_t(members[i])].face].emission);
+    if (ke > 0) ++dark_emitters_;
+  }
 }
 
 // Per-element arrays for the elements Divide() has added; a divided
@@ -107,6 +126,7 @@ void Solver::Grow() {
   patch_of_.resize(n);
   is_changed_.resize(n, 0);
   if (pixel_ff_ > 0) noise_.resize(n, 0.0);
+  if (track_direct_) direct_.resize(n, 0.0f);
   // Only added elements and their parents (divided since): O(divisions).
   for (size_t e = from; e < n; ++e) {
     const Element& el = mesh_.elems[e];
@@ -121,6 +141,11 @@ void Solver::TrackNoise(int resolution) {
   pixel_ff_ = 4 / (M_PI * double(resolution) * resolution);
   noise_.resize(b_.size(), 0.0);
   pixel_df_.resize(mesh_.patches.size());
+}
+
+void Solver::TrackDirect() {
+  track_direct_ = true;
+  direct_.resize(b_.size(), 0.0f);
 }
 
 void Solver::Resum() {
@@ -236,8 +261,10 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   const int* members = group ? group->members.data() : single;
   const size_t count = group ? group->members.size() : 1;
   glm::dvec3 xa(0.0);  // Σ x·A of what shoots
+  glm::dvec3 ka(0.0);  // Σ Ke·A of it, at its first shot in the wave (TrackDirect)
   for (size_t i = 0; i < count; ++i) {
     const int m = members[i];
+    if (times_shot_[p] == 0) ka += mesh_.faces[mesh_.patches[m].face].emission * area_[m];
     // A shooter that sees no element sends its light out of the scene:
     // its unshot radiosity is spent, and it is never chosen again (nothing
     // can send it light either, by reciprocity).
@@ -263,6 +290,8 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   const FormFactor* col = column.data();
   const size_t n = column.size();
   const bool noisy = pixel_ff_ > 0;
+  if (Abs(ka) > 0) --dark_emitters_;  // its first shot (blind or not)
+  const bool direct = track_direct_ && Abs(ka) > 0;
   // Where the hemicube looked from (Hemicube::Column), for the noise: each
   // element's direction is taken as its patch centre's.
   const glm::dvec3 from = group ? group->center : center_[size_t(p)];
@@ -292,18 +321,23 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     // copy per element (24 bytes an element): the same division, so the
     // same bits.
     if (q >= 0) {
-      const glm::dvec3 gain = xa * (f * (rho_[size_t(q)] / mesh_.elems[size_t(e)].area));
+      const glm::dvec3 w = f * (rho_[size_t(q)] / mesh_.elems[size_t(e)].area);
+      const glm::dvec3 gain = xa * w;
       b_[e] += gain;
+      if (direct) direct_[e] += float(Lum(ka * w));
       if (noisy) noise_[e] += ShotNoise((gain.r + gain.g + gain.b) / 3, f, pixel(q));
       if (track_) Changed(e);
     } else {  // divided since the column was computed: each leaf gains alike
       q = ~q;
       mesh_.LeavesUnder(e, &leaves_);
-      const glm::dvec3 gain = xa * (f * (rho_[size_t(q)] / mesh_.elems[size_t(e)].area));
+      const glm::dvec3 w = f * (rho_[size_t(q)] / mesh_.elems[size_t(e)].area);
+      const glm::dvec3 gain = xa * w;
       const double var = noisy ? ShotNoise((gain.r + gain.g + gain.b) / 3, f, pixel(q)) : 0;
+      const float first = direct ? float(Lum(ka * w)) : 0.0f;
       bool one_patch = true;
       for (int l : leaves_) {
         b_[l] += gain;
+        if (direct) direct_[l] += first;
         if (noisy) noise_[l] += var;
         if (track_) Changed(l);
         one_patch &= patch_of_[size_t(l)] == q;
@@ -372,6 +406,7 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
       b_[mesh_.elems[p].first_child + k] = b_[p];
       // What they have is the parent's, and so is its error.
       if (pixel_ff_ > 0) noise_[mesh_.elems[p].first_child + k] = noise_[p];
+      if (track_direct_) direct_[mesh_.elems[p].first_child + k] = direct_[p];
       if (track_) Changed(mesh_.elems[p].first_child + k);
     }
   // Fitted to the values as they are now (elements divided in this pass
@@ -513,6 +548,7 @@ SolverState Solver::State() const {
   s.blind = blind_;
   s.times_shot.assign(times_shot_.begin(), times_shot_.end());
   s.noise = noise_;
+  s.direct = direct_;
   s.unshot_sum = unshot_sum_;
   s.abs_sum = abs_sum_;
   s.shots = shots_;
@@ -523,7 +559,8 @@ bool Solver::Restore(const SolverState& s, std::string* err) {
   const size_t np = mesh_.patches.size();
   if (s.b.size() != mesh_.elems.size() || s.unshot.size() != np || s.lit.size() != np ||
       s.blind.size() != np || s.times_shot.size() != np ||
-      (!s.noise.empty() && s.noise.size() != mesh_.elems.size())) {
+      (!s.noise.empty() && s.noise.size() != mesh_.elems.size()) ||
+      (!s.direct.empty() && s.direct.size() != mesh_.elems.size())) {
     *err = "solver state of " + std::to_string(s.b.size()) + " elements and " +
            std::to_string(s.unshot.size()) + " patches, the mesh has " +
            std::to_string(mesh_.elems.size()) + " and " + std::to_string(np);
@@ -540,9 +577,12 @@ bool Solver::Restore(const SolverState& s, std::string* err) {
   blind_ = s.blind;
   times_shot_.assign(s.times_shot.begin(), s.times_shot.end());
   noise_ = s.noise;
+  direct_ = s.direct;
+  if (track_direct_) direct_.resize(b_.size(), 0.0f);
   unshot_sum_ = s.unshot_sum;
   abs_sum_ = s.abs_sum;
   shots_ = s.shots;
+  CountDarkEmitters();
   Rebase();
   return true;
 }

@@ -27,6 +27,7 @@ struct SolverState {
   std::vector<uint8_t> lit, blind;    // per patch
   std::vector<int32_t> times_shot;    // per patch
   std::vector<double> noise;          // per element, when tracked (TrackNoise)
+  std::vector<float> direct;          // per element, when tracked (TrackDirect)
   glm::dvec3 unshot_sum{0.0};         // the running sums as they are, drift
   double abs_sum = 0;                 // included, so that a resumed run
   long shots = 0;                     // makes the same choices bit for bit
@@ -76,6 +77,20 @@ class Solver {
   // pixels (TrackNoise), a divided element's children have their
   // parent's; empty when not tracked.
   const std::vector<double>& noise() const { return noise_; }
+
+  // From now on Shoot also sums, per element, the luminance its first
+  // light brings: ρ·Ke·F·A_s/A_e of each emitting shooter's first shot in
+  // the wave (direct(); what shooter division measures, split.cpp). It
+  // depends on the mesh and the emitters' columns only, not on the order
+  // other shots come in, so every run of the scene (any -j) measures the
+  // same. Float: it only decides splits against a threshold, and 4
+  // bytes an element is what it costs. Keeps a restored direct().
+  void TrackDirect();
+  // Per element: that direct luminance (a divided element's children
+  // have their parent's); empty when not tracked.
+  const std::vector<float>& direct() const { return direct_; }
+  // Every emitting shooter has shot in this wave: direct() is complete.
+  bool DirectDone() const { return dark_emitters_ == 0; }
 
   // The elements whose radiosity changed since the last call (each once;
   // those Divided() made included), into *out: what a division pass needs
@@ -132,6 +147,7 @@ class Solver {
     }
   }
   void Resum();
+  void CountDarkEmitters();
   void Grow();
   void PatchArrays();
 
@@ -150,6 +166,9 @@ class Solver {
   std::vector<double> noise_;       // per element when tracked: variance of Lum(B)
   double pixel_ff_ = 0;             // a top-centre pixel's delta form factor; 0: no noise
   std::vector<double> pixel_df_;    // per patch: its pixels' in this shot's direction
+  std::vector<float> direct_;       // per element when tracked: first light's luminance
+  bool track_direct_ = false;
+  long dark_emitters_ = 0;          // emitting shooters not yet shot in this wave
   std::vector<int32_t> changed_;    // elements whose B changed, for TakeChanged
   bool track_ = false;              // since TakeChanged was first called
   std::vector<uint8_t> lit_;        // per patch: emits, or light reached it

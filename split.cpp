@@ -1,10 +1,14 @@
-// Shooter division's side of the mesh (declared in mesh.h): cutting a
-// patch into patches along its elements. The policy that chooses them is
-// subdivide.cpp's, the sharing of the unshot power the solver's.
+// Shooter division: cutting a patch into patches along its elements (the
+// mesh's side, declared in mesh.h), and the policy that chooses them
+// (Subdivider::SplitPass, declared and described in subdivide.h). The
+// sharing of the unshot power is the solver's (Solver::Split).
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "check.h"
 #include "mesh.h"
+#include "subdivide.h"
 
 namespace {
 
@@ -72,4 +76,154 @@ void SplitPatch(Mesh* mesh, int patch) {
   // A divided top that gave its children away stays with the patch: its
   // children are what shoot and receive.
   mesh->splits.push_back(patch);
+}
+
+// ---- the policy (Subdivider::SplitPass; subdivide.h) ------------------
+
+namespace {
+
+// A patch SplitPass may split: not an emitter, with pieces (SplitPieces;
+// not in a shooter group) into *tops.
+bool Splittable(const Mesh& m, int p, std::vector<int>* tops) {
+  const glm::dvec3& ke = m.faces[size_t(m.patches[size_t(p)].face)].emission;
+  return !(ke.r + ke.g + ke.b > 0) && SplitPieces(m, p, tops) > 1;
+}
+
+// A grid cell's key: three 21-bit cell coordinates, clamped (clamping
+// keeps a point's cell inside any clamped range that held it).
+uint64_t CellKey(const glm::ivec3& c) {
+  constexpr int kMax = (1 << 21) - 1;
+  const glm::ivec3 k = glm::clamp(c, glm::ivec3(0), glm::ivec3(kMax));
+  return uint64_t(k.x) << 42 | uint64_t(k.y) << 21 | uint64_t(k.z);
+}
+
+}  // namespace
+
+// near_ for the patches from `from` on (the built ones, then the pieces
+// splits made): the top elements of every face in a grid of cells
+// split_near × the median width of those patches across, sorted by cell;
+// each splittable patch looks in the cells its radius reaches (or at
+// every element, when those cells would be more).
+void Subdivider::FindNear(const Mesh& mesh, size_t from) {
+  const size_t n = mesh.patches.size();
+  near_.resize(n, 0);
+  if (!(opts_.split_near > 0) || from >= n) return;
+  std::vector<double> widths;
+  for (size_t p = from; p < n; ++p)
+    if (Splittable(mesh, int(p), &tops_)) widths.push_back(std::sqrt(mesh.patches[p].area));
+  if (widths.empty()) return;
+  std::nth_element(widths.begin(), widths.begin() + long(widths.size() / 2), widths.end());
+  const double cell = opts_.split_near * widths[widths.size() / 2];
+  if (!(cell > 0)) return;
+  struct Top {
+    uint64_t key;
+    int32_t e;
+    glm::dvec3 c;
+  };
+  std::vector<Top> tops;
+  glm::dvec3 lo(HUGE_VAL);
+  for (size_t p = 0; p < mesh.patches.size(); ++p)
+    for (int e : mesh.Tops(int(p))) {
+      tops.push_back({0, e, mesh.Centroid(e)});
+      lo = glm::min(lo, tops.back().c);
+    }
+  auto cell_of = [&](const glm::dvec3& x) { return glm::ivec3(glm::floor((x - lo) / cell)); };
+  for (Top& t : tops) t.key = CellKey(cell_of(t.c));
+  std::sort(tops.begin(), tops.end(),
+            [](const Top& a, const Top& b) { return a.key != b.key ? a.key < b.key : a.e < b.e; });
+  for (size_t p = from; p < n; ++p) {
+    if (!Splittable(mesh, int(p), &tops_)) continue;
+    const Patch& patch = mesh.patches[p];
+    const glm::dvec3 c0 = patch.center, normal = mesh.faces[size_t(patch.face)].normal;
+    const double r = opts_.split_near * std::sqrt(patch.area);
+    // Another face's top element, in front, facing back, within r.
+    auto close = [&](const Top& t) {
+      if (mesh.elems[size_t(t.e)].patch >= 0 &&
+          mesh.patches[size_t(mesh.elems[size_t(t.e)].patch)].face == patch.face)
+        return false;
+      const glm::dvec3 d = t.c - c0;
+      return glm::dot(d, normal) > 0 && glm::dot(mesh.FaceOf(t.e).normal, d) < 0 &&
+             glm::dot(d, d) < r * r;
+    };
+    const glm::ivec3 a = cell_of(c0 - glm::dvec3(r)), b = cell_of(c0 + glm::dvec3(r));
+    const glm::dvec3 span = glm::dvec3(b - a) + 1.0;
+    bool found = false;
+    if (span.x * span.y * span.z > double(tops.size())) {
+      for (const Top& t : tops)
+        if ((found = close(t))) break;
+    } else {
+      for (int x = a.x; x <= b.x && !found; ++x)
+        for (int y = a.y; y <= b.y && !found; ++y)
+          for (int z = a.z; z <= b.z && !found; ++z) {
+            const uint64_t key = CellKey({x, y, z});
+            auto it = std::lower_bound(tops.begin(), tops.end(), key,
+                                       [](const Top& t, uint64_t k) { return t.key < k; });
+            for (; it != tops.end() && it->key == key && !found; ++it) found = close(*it);
+          }
+    }
+    near_[p] = found;
+  }
+}
+
+// spread_ for the splittable patches from `from` on: their pieces' range
+// of mean direct luminance over the scale (subdivide.h); the lit scene's
+// mean first, when from is 0.
+void Subdivider::Spread(const Mesh& mesh, const std::vector<float>& direct, size_t from) {
+  const size_t n = mesh.patches.size();
+  spread_.resize(n, 0);
+  if (from == 0) {
+    double sum = 0, area = 0;  // over every leaf not emitting
+    for (size_t e = 0; e < mesh.elems.size(); ++e) {
+      const Element& el = mesh.elems[e];
+      const glm::dvec3& ke = mesh.FaceOf(int(e)).emission;
+      if (!el.IsLeaf() || ke.r + ke.g + ke.b > 0) continue;
+      sum += double(direct[e]) * el.area;
+      area += el.area;
+    }
+    direct_mean_ = area > 0 ? sum / area : 0;
+  }
+  for (size_t p = from; p < n; ++p) {
+    spread_[p] = 0;
+    if (!Splittable(mesh, int(p), &tops_)) continue;
+    double hi = -HUGE_VAL, lo = HUGE_VAL;
+    for (int t : tops_) {
+      mesh.LeavesUnder(t, &leaves_);
+      double s = 0, a = 0;
+      for (int l : leaves_) {
+        s += double(direct[size_t(l)]) * mesh.elems[size_t(l)].area;
+        a += mesh.elems[size_t(l)].area;
+      }
+      const double m = a > 0 ? s / a : 0;
+      hi = std::max(hi, m);
+      lo = std::min(lo, m);
+    }
+    const double scale = hi + 0.2 * direct_mean_;
+    if (scale > 0) spread_[p] = (hi - lo) / scale;
+  }
+}
+
+std::vector<int32_t> Subdivider::SplitPass(const Mesh& mesh, const std::vector<float>& direct,
+                                           bool direct_done) {
+  std::vector<int32_t> out;
+  if (!opts_.split) return out;
+  CHECK(direct.size() == mesh.elems.size());
+  FindNear(mesh, near_.size());
+  // Every patch when the wave's direct light is complete, then the pieces
+  // made since (their pieces' light is as it was then: divisions in the
+  // wave hand it down unchanged).
+  if (direct_done) Spread(mesh, direct, measured_ ? spread_.size() : 0);
+  measured_ |= direct_done;
+  const size_t n = mesh.patches.size();
+  for (size_t p = 0; p < n; ++p) {
+    const bool uneven = measured_ && p < spread_.size() && spread_[p] > split_threshold_;
+    const bool close = p < near_.size() && near_[p];
+    if (!(close || uneven)) continue;
+    out.push_back(int32_t(p));
+    if (p < spread_.size()) spread_[p] = 0;
+    if (close) near_[p] = 0;
+  }
+  splits_ += long(out.size());
+  divided_in_wave_ += long(out.size());
+  if (measured_) split_threshold_ = std::max(opts_.split_floor, split_threshold_ * opts_.decay);
+  return out;
 }

@@ -130,7 +130,6 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::d
     area += mean_area_[e];
   }
   const double mean = area > 0 ? sum / area : 0;
-  mean_ = mean;
 
   // The leaves to evaluate, marked: every one at a wave's first pass (or
   // without `incremental`); else those changed, their neighbours, the new,
@@ -220,8 +219,7 @@ void Subdivider::StartWave(const Mesh& mesh) {
   // The radiosity starts again: the wave's first pass evaluates every leaf.
   pass_ambient_.clear();
   pass_mean_.clear();
-  hi_.clear();
-  lo_.clear();
+  measured_ = false;
   wave_start_leaves_ = mesh.LeafCount();
   divided_in_wave_ = 0;
   last_pass_ = -1;
@@ -248,8 +246,8 @@ void Subdivider::Restore(const SubdividerState& s) {
   eligible_.clear();
   pass_ambient_.clear();
   pass_mean_.clear();
-  hi_.clear();
-  lo_.clear();
+  measured_ = false;
+  near_.clear();
   threshold_ = s.threshold;
   split_threshold_ = s.split_threshold;
   splits_ = s.splits;
@@ -260,61 +258,4 @@ void Subdivider::Restore(const SubdividerState& s) {
   quiet_ = s.quiet;
   passes_ = s.passes;
   seconds_ = s.seconds;
-}
-
-// Patch p's pieces' brightest and darkest mean luminance; hi = lo = 0 for
-// a patch that may not be split.
-void Subdivider::Spread(const Mesh& mesh, const std::vector<glm::dvec3>& b, int p) {
-  hi_[size_t(p)] = lo_[size_t(p)] = 0;
-  const glm::dvec3& ke = mesh.faces[size_t(mesh.patches[size_t(p)].face)].emission;
-  if (ke.r + ke.g + ke.b > 0 || SplitPieces(mesh, p, &tops_) < 2) return;
-  double hi = -HUGE_VAL, lo = HUGE_VAL;
-  for (int t : tops_) {
-    mesh.LeavesUnder(t, &leaves_);
-    double sum = 0, area = 0;
-    for (int l : leaves_) {
-      sum += Lum(b[size_t(l)]) * mesh.elems[size_t(l)].area;
-      area += mesh.elems[size_t(l)].area;
-    }
-    const double mean = area > 0 ? sum / area : 0;
-    hi = std::max(hi, mean);
-    lo = std::min(lo, mean);
-  }
-  hi_[size_t(p)] = hi;
-  lo_[size_t(p)] = lo;
-}
-
-std::vector<int32_t> Subdivider::SplitPass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
-                                           const glm::dvec3& ambient,
-                                           const std::vector<int32_t>& changed,
-                                           const std::vector<int32_t>& divided) {
-  std::vector<int32_t> out;
-  if (!opts_.split) return out;
-  const size_t n = mesh.patches.size();
-  // Measured again: every patch at a wave's first pass, new ones, split
-  // ones and those a changed or divided element belongs to.
-  hi_.resize(n, 0);
-  lo_.resize(n, 1);
-  for (const std::vector<int32_t>* list : {&changed, &divided})
-    for (int32_t e : *list)
-      if (size_t(e) < mesh.elems.size()) {
-        const int p = mesh.elems[size_t(e)].patch;
-        hi_[size_t(p)] = 0;
-        lo_[size_t(p)] = 1;
-      }
-  for (size_t p = 0; p < n; ++p) {
-    if (lo_[p] > hi_[p]) Spread(mesh, b, int(p));
-    if (!(hi_[p] > lo_[p])) continue;
-    const double scale =
-        hi_[p] + Lum(mesh.faces[size_t(mesh.patches[p].face)].rho * ambient) + 0.2 * mean_;
-    if (scale > 0 && (hi_[p] - lo_[p]) / scale > split_threshold_) {
-      out.push_back(int32_t(p));
-      lo_[p] = 1;  // measured again after the split
-      hi_[p] = 0;
-    }
-  }
-  splits_ += long(out.size());
-  divided_in_wave_ += long(out.size());
-  split_threshold_ = std::max(opts_.split_floor, split_threshold_ * opts_.decay);
-  return out;
 }

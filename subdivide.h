@@ -46,18 +46,33 @@
 // 1/16 of its distance across, under the shooter, covers 4 pixels, ±25%
 // in one shot, and even a full shadow edge there is at the limit.
 //
-// Shooter division (SplitPass) is led alike, at the same passes: a patch
-// whose pieces (SplitPieces: its top elements, or its one top element's
-// children) differ strongly in radiosity shoots from its centre light that
-// really leaves from its bright part (a table top round the contact
-// shadow of what stands on it), so it is split (SplitPatch) when
+// Shooter division (SplitPass, split.cpp) is led alike, at the same
+// passes: a patch is split into patches, one a piece (SplitPatch), when
 //
-//   (max_i B_i - min_i B_i) / (max_i B_i + Kd·ambient + 0.2 × mean)
+//  * its light is uneven: it shoots from its centre light that really
+//    leaves from its bright part (a table top round the contact shadow of
+//    what stands on it). Measured on the light it received first
+//    (Solver::direct(): each emitter's first shot of the wave, which
+//    depends on the mesh only and not on the order in which columns come
+//    back, so that every -j splits alike), once every emitter has shot:
 //
-// exceeds its own threshold, lowered by `decay` every pass down to
-// split_floor; B_i is piece i's area-weighted mean luminance, the scale
-// that of the dividing factor. Emitters are never split (their light is
-// their own, not received), nor members of shooter groups (groups.h).
+//      (max_i D_i - min_i D_i) / (max_i D_i + 0.2 × mean D of the lit scene)
+//
+//    over its pieces' (SplitPieces: its top elements, or its one top
+//    element's children) area-weighted mean direct luminance D_i
+//    exceeds the split threshold, lowered by `decay` every pass from then
+//    on down to split_floor (measured once a wave even when no division
+//    pass is due any more, SplitDue: a later wave's first light tells
+//    apart the children of elements divided before it); or
+//  * its receivers are close: a top element of another face, in front of
+//    it and facing it, has its centroid nearer than split_near × the
+//    patch's width (√area) to the patch's centre, where the hemicube at
+//    the centre misjudges how it sees the patch (geometry: at the first
+//    pass, and for the pieces of a split at the pass after).
+//
+// Splits of children follow element divisions, which the order of shots
+// moves a little. Emitters are never split (their light is their own, not
+// received), nor members of shooter groups (groups.h).
 #ifndef RADIOSITY_SUBDIVIDE_H
 #define RADIOSITY_SUBDIVIDE_H
 
@@ -79,8 +94,9 @@ struct SubdivideOptions {
   long between = 10;       // shots between passes (at least 10)
   double quiet = 0.002;    // a pass dividing under this fraction of the leaves is quiet
   bool split = false;           // shooter division (SplitPass): --split
-  double split_threshold = 0.6; // the spread a patch must exceed, at first
-  double split_floor = 0.5;     // ... lowered by `decay` every pass down to this
+  double split_threshold = 0.9; // the spread a patch must exceed, at first
+  double split_floor = 0.8;     // ... lowered by `decay` every pass down to this
+  double split_near = 0.35;     // receivers nearer than this × its width split it; 0: never
   // Elements (mesh.elems, divided ones included) a pass may not go past:
   // a pass that would is dropped and subdivision ends (capped()).
   long max_elements = kMaxElements;
@@ -135,18 +151,20 @@ class Subdivider {
                             long shots, const std::vector<int32_t>& changed);
   // The patches to split after the pass just made (call it after Pass and
   // after the divisions are applied and shared, Solver::Divided), in
-  // increasing id: those whose spread exceeds the split threshold
-  // (above). Only patches with an element in `changed` (as given to Pass)
-  // or `divided` (what it returned), new ones and those split last time
-  // are measured again; the others keep their pieces' radiosity from
-  // then, which is theirs now (their radiosity did not change), under the
-  // scale of now: so the result is that of measuring every patch, and a
-  // resumed run, which measures all at its first pass, splits alike.
-  // Lowers the split threshold. Empty without opts.split.
-  std::vector<int32_t> SplitPass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
-                                 const glm::dvec3& ambient, const std::vector<int32_t>& changed,
-                                 const std::vector<int32_t>& divided);
+  // increasing id (above). direct: Solver::direct(); direct_done:
+  // Solver::DirectDone(), before which only closeness splits. The spreads
+  // are measured once a wave, when direct_done (divisions since give
+  // children their parent's direct light: the pieces' means stay), so a
+  // resumed run, which measures them at its first pass, splits alike.
+  // Lowers the split threshold once the spreads are measured. Empty
+  // without opts.split.
+  std::vector<int32_t> SplitPass(const Mesh& mesh, const std::vector<float>& direct,
+                                 bool direct_done);
   long splits() const { return splits_; }
+  bool splitting() const { return opts_.split; }
+  // A wave's first light is complete and not yet measured: SplitPass is
+  // due even where no division pass is (Due), as after the last one.
+  bool SplitDue(bool direct_done) const { return opts_.split && direct_done && !measured_; }
 
   // Leaves whose factor the last pass computed.
   long evaluated() const { return evaluated_; }
@@ -181,7 +199,8 @@ class Subdivider {
                 bool* bounded);
   void Track(const Mesh& mesh);
   double PassBound(int pass, const glm::dvec3& ambient, double mean) const;
-  void Spread(const Mesh& mesh, const std::vector<glm::dvec3>& b, int p);
+  void FindNear(const Mesh& mesh, size_t from);
+  void Spread(const Mesh& mesh, const std::vector<float>& direct, size_t from);
 
   SubdivideOptions opts_;
   // Per element, grown as the mesh is: may it be divided (a leaf above
@@ -199,10 +218,14 @@ class Subdivider {
   long evaluated_ = 0;
   double threshold_;
   double split_threshold_;
-  double mean_ = 0;                // the lit scene's mean at the last Pass
-  // Per patch: its pieces' brightest and darkest mean luminance when last
-  // measured (lo > hi: to be measured), for SplitPass.
-  std::vector<double> hi_, lo_;
+  // Per patch, for SplitPass: its top elements' brightest and darkest
+  // mean direct luminance over the scale (0: not split by light), when
+  // measured_ in this wave; whether its receivers are close (near_,
+  // found at the first pass; empty: not yet).
+  std::vector<double> spread_;
+  bool measured_ = false;
+  double direct_mean_ = 0;         // the lit scene's mean D when measured
+  std::vector<uint8_t> near_;
   std::vector<int> tops_, leaves_; // SplitPass's scratch
   long splits_ = 0;
   long first_ = 0;

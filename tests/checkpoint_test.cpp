@@ -106,6 +106,7 @@ Checkpoint Plausible() {
   Checkpoint c = Filled();
   c.solver.b.resize(c.elements, glm::dvec3(0.125));
   c.solver.noise.assign(c.elements, 0.5);
+  c.solver.direct.assign(c.elements, 0.25f);
   c.solver.shots = 40;
   return c;
 }
@@ -131,6 +132,7 @@ TEST(Checkpoint, RoundTrip) {
   EXPECT_TRUE(std::signbit(b.solver.b[1].x));
   EXPECT_EQ(b.solver.times_shot, a.solver.times_shot);
   EXPECT_EQ(b.solver.noise, a.solver.noise);
+  EXPECT_EQ(b.solver.direct, a.solver.direct);
   EXPECT_EQ(b.subdivider.threshold, 0.35);
   EXPECT_TRUE(b.subdivider.quiet);
   EXPECT_EQ(b.run.best, HUGE_VAL);
@@ -139,16 +141,17 @@ TEST(Checkpoint, RoundTrip) {
   EXPECT_EQ(CompareOptions(a.options, b.options), "");
 }
 
-// Format 3 (format 1 plus the two group options, 9 bytes, in 2; plus the
+// Format 4 (format 1 plus the two group options, 9 bytes, in 2; plus the
 // noise array, its 8-byte count here, the three shooter-division options,
-// 17 bytes, and their state, 16, in 3) pinned byte for byte (the trailing
+// 17 bytes, and their state, 16, in 3; plus --split-near, 8, and the
+// direct light array's count, 8, in 4) pinned byte for byte (the trailing
 // SHA-256 covers every byte before it), and the scene and mesh hashes a
 // checkpoint is checked against are those format 1 had.
-TEST(Checkpoint, BytesAndHashesAreThoseOfFormat3) {
+TEST(Checkpoint, BytesAndHashesAreThoseOfFormat4) {
   const std::string bytes = EncodeCheckpoint(Filled());
-  EXPECT_EQ(bytes.size(), 651u);
+  EXPECT_EQ(bytes.size(), 667u);
   EXPECT_EQ(Hex(bytes.substr(bytes.size() - 32)),
-            "13210f615aafbc85cb5922a742aee42524826063901f37c1551cf4396d4fed48");
+            "1485f07040571ab43fa70735736644d289d1379c89d2d75ab1a4ddee8bb1a7ec");
   EXPECT_EQ(Hex(SceneHash(ShadowScene())),
             "e5ded178170e67915e7e2c974f2f76313e56922c54aa9ce557da0635a7ee8021");
   EXPECT_EQ(MeshHash(MakeMesh(ShadowScene(), ShadowMesh())), 0x4305479c346ad8daull);
@@ -188,7 +191,7 @@ TEST(Checkpoint, ForeignAndOtherVersionsAreRefused) {
   EXPECT_EQ(Error(""), "not a radiosity checkpoint (no RADCKPT magic)");
   std::string v1 = EncodeCheckpoint(Filled());
   v1[8] = 1;
-  EXPECT_EQ(Error(v1), "checkpoint format version 1, this radiosity reads 3");
+  EXPECT_EQ(Error(v1), "checkpoint format version 1, this radiosity reads 4");
 }
 
 // An edited checkpoint, re-hashed so that its checksum holds: values no

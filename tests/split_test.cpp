@@ -147,31 +147,104 @@ TEST(Split, SolverKeepsTheUnshotPower) {
   }
 }
 
-// The policy: a patch whose pieces differ strongly is split, an even one
-// is not, nor an emitter, and the threshold goes down to the floor.
+// The policy: a patch whose top elements' direct light differs strongly
+// is split, once the emitters have shot, an even one is not, nor an
+// emitter, and the threshold goes down to the floor.
 TEST(Split, PolicySplitsUnevenPatchesOnly) {
   Mesh m = MakeMesh(Floor(), Coarse());
   SubdivideOptions so;
   so.split = true;
+  so.split_near = 0;  // by light only here
   Subdivider sub(&m, so);
-  std::vector<glm::dvec3> b(m.elems.size(), glm::dvec3(1.0));
-  b[size_t(m.Tops(2)[0])] = glm::dvec3(0.2);  // patch 2: one dark piece
-  b[size_t(m.Tops(1)[3])] = glm::dvec3(0.8);  // patch 1: a little uneven
+  std::vector<float> d(m.elems.size(), 1.0f);
+  d[size_t(m.Tops(2)[0])] = 0.0f;  // patch 2: one dark piece, spread 0.85
+  d[size_t(m.Tops(1)[3])] = 0.1f;  // patch 1: spread 0.77
   for (int p : m.faces[1].patches)  // the light: uneven, never split
-    b[size_t(m.Tops(p)[0])] = glm::dvec3(0.0);
-  sub.Pass(m, b, {}, glm::dvec3(0.0), 100, {});
-  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {}, {}), (std::vector<int32_t>{2}));
+    d[size_t(m.Tops(p)[0])] = 0.0f;
+  // Before every emitter shot, nothing, and the threshold waits.
+  EXPECT_TRUE(sub.SplitPass(m, d, false).empty());
+  EXPECT_EQ(sub.State().split_threshold, so.split_threshold);
+  EXPECT_TRUE(sub.SplitPass(m, d, true).empty());  // 0.85 < 0.9
+  EXPECT_EQ(sub.SplitPass(m, d, true), (std::vector<int32_t>{2}));  // at the floor, 0.8
   SplitPatch(&m, 2);  // into pieces of one leaf each: none splits again
-  // Measured again only where a leaf changed: patch 1, now darker there.
-  b[size_t(m.Tops(1)[3])] = glm::dvec3(0.3);
-  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {}, {}), (std::vector<int32_t>{}));
-  EXPECT_EQ(sub.SplitPass(m, b, glm::dvec3(0.0), {m.Tops(1)[3]}, {}),
-            (std::vector<int32_t>{1}));
-  EXPECT_EQ(sub.splits(), 2);
-  EXPECT_EQ(sub.State().split_threshold, so.split_floor);  // 0.6 · 0.7 < 0.5
+  d.resize(m.elems.size(), 1.0f);
+  // Measured once a wave: a change since counts from the next wave.
+  d[size_t(m.Tops(3)[0])] = 0.0f;
+  EXPECT_TRUE(sub.SplitPass(m, d, true).empty());
+  EXPECT_EQ(sub.splits(), 1);
+  EXPECT_EQ(sub.State().split_threshold, so.split_floor);
+  sub.StartWave(m);
+  EXPECT_EQ(sub.SplitPass(m, d, true), (std::vector<int32_t>{3}));
   so.split = false;
   Subdivider off(&m, so);
-  EXPECT_TRUE(off.SplitPass(m, b, glm::dvec3(0.0), {}, {}).empty());
+  EXPECT_TRUE(off.SplitPass(m, d, true).empty());
+}
+
+// Closeness: a face hanging just over one floor patch, facing it, splits
+// that patch at the first pass whatever the light; the others stay.
+TEST(Split, CloseReceiversSplitAPatch) {
+  Scene s = Floor();
+  AddFace(&s, {{0.1, 0.05, 0.1}, {0.2, 0.05, 0.1}, {0.2, 0.05, 0.2}, {0.1, 0.05, 0.2}},
+          glm::dvec3(0.5), glm::dvec3(0));  // facing down
+  Mesh m = MakeMesh(s, Coarse());
+  int under = -1;
+  for (int p : m.faces[0].patches)
+    if (glm::length(m.patches[p].center - glm::dvec3(0.25, 0, 0.25)) < 1e-9) under = p;
+  ASSERT_GE(under, 0);
+  SubdivideOptions so;
+  so.split = true;
+  Subdivider sub(&m, so);
+  const std::vector<float> d(m.elems.size(), 1.0f);
+  std::vector<int32_t> got = sub.SplitPass(m, d, false);
+  EXPECT_NE(std::find(got.begin(), got.end(), under), got.end());
+  for (int p : m.faces[0].patches) {
+    if (p == under) continue;
+    EXPECT_EQ(std::find(got.begin(), got.end(), p), got.end()) << p;
+  }
+  so.split_near = 0;
+  Subdivider far(&m, so);
+  EXPECT_TRUE(far.SplitPass(m, d, false).empty());
+}
+
+// The direct light is the emitters' first shots' and nothing else: two
+// lights shot in either order, with other patches' shots between or not,
+// leave the same direct() (two float terms: the same sum either way), and
+// DirectDone() once both shot.
+TEST(Split, DirectLightDoesNotDependOnShotOrder) {
+  Scene s = Floor();
+  AddFace(&s, {{0.1, 0.5, 0.1}, {0.3, 0.5, 0.1}, {0.3, 0.5, 0.3}, {0.1, 0.5, 0.3}},
+          glm::dvec3(0.5), glm::dvec3(4.0));
+  const Mesh m = MakeMesh(s, Coarse());
+  const int l1 = m.faces[1].patches[0], l2 = m.faces[2].patches[0];
+  ASSERT_EQ(m.faces[1].patches.size(), 1u);
+  ASSERT_EQ(m.faces[2].patches.size(), 1u);
+  Hemicube h(64);
+  std::vector<FormFactor> col;
+  auto shoot = [&](Solver* solver, int p) {
+    ShotColumn(&h, m, p, solver->TimesShot(p), true, 1, &col);
+    solver->Shoot(p, col);
+  };
+  Solver a(m, true), b(m, true);
+  a.TrackDirect();
+  b.TrackDirect();
+  EXPECT_FALSE(a.DirectDone());
+  shoot(&a, l1);
+  EXPECT_FALSE(a.DirectDone());
+  shoot(&a, l2);
+  EXPECT_TRUE(a.DirectDone());
+  shoot(&b, l2);
+  shoot(&b, m.faces[0].patches[1]);  // a floor patch, lit by l2, between
+  shoot(&b, l1);
+  shoot(&b, l2);  // a second shot of a light is not its first light
+  EXPECT_TRUE(b.DirectDone());
+  EXPECT_EQ(a.direct(), b.direct());
+  double lit = 0;
+  for (float x : a.direct()) lit += x;
+  EXPECT_GT(lit, 0);
+  // And a new wave starts it again.
+  a.NewWave();
+  EXPECT_FALSE(a.DirectDone());
+  for (float x : a.direct()) EXPECT_EQ(x, 0.0f);
 }
 
 // A furnace splits nothing, through a whole run with its division passes.
