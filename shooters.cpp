@@ -28,8 +28,19 @@ void ShooterQueue::Build(const std::vector<double>& bounds, const std::vector<do
   visited_ = 0;
 }
 
+// A bound that grew (light arrived) raises the nodes above it to it, up to
+// the first that holds as much: the max of children, one of which grew, is
+// the old max or the new value. Nodes above shrunk leaves not yet flushed
+// may hold too much and stop the walk early; Flush recomputes them from
+// their children later, this leaf's side included.
 void ShooterQueue::Leaf(int i, double value) {
-  tree_[leaves_ + size_t(i)] = value;
+  size_t k = leaves_ + size_t(i);
+  const double old = tree_[k];
+  tree_[k] = value;
+  if (value >= old) {
+    for (k >>= 1; k >= 1 && tree_[k] < value; k >>= 1) tree_[k] = value;
+    return;
+  }
   dirty_.push_back(i);
   if (dirty_.size() > size_t(n_)) Flush();  // no Best() for long: bounded all the same
 }

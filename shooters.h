@@ -18,10 +18,10 @@
 // Numbers: bounds and powers are double, as the solver's are.
 // Taken shooters (handed to a worker, not yet shot) are kept out of the
 // tree, so that a scheduler asking for the next one many times per shot
-// pays O(log n) per take, not a scan of what it holds. Changes reach the
-// tree's inner nodes at the next Best(): level by level from the changed
-// leaves, or all at once when a shot changed more than a quarter of the
-// shooters (a small scene, where one column reaches most patches).
+// pays O(log n) per take, not a scan of what it holds. A bound that grew
+// reaches the tree's inner nodes at once (as far up as it is the greatest);
+// one that shrank, at the next Best(): level by level from the shrunk
+// leaves, or all at once when more than a quarter of the shooters shrank.
 #ifndef RADIOSITY_SHOOTERS_H
 #define RADIOSITY_SHOOTERS_H
 

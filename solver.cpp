@@ -279,12 +279,19 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     }
     return pixel_df_[size_t(q)];
   };
+  // Its patch's ρ and Σ F are fetched kAhead early too, from its patch id
+  // fetched 2 kAhead early.
   for (size_t i = 0; i < n; ++i) {
+    if (i + 2 * kAhead < n) __builtin_prefetch(&patch_of_[size_t(col[i + 2 * kAhead].elem)]);
     if (i + kAhead < n) {
       const int32_t a = col[i + kAhead].elem;
       __builtin_prefetch(&b_[size_t(a)], 1);
       __builtin_prefetch(&elem_area_[size_t(a)]);
-      __builtin_prefetch(&patch_of_[size_t(a)]);
+      const int32_t qa = patch_of_[size_t(a)];
+      if (qa >= 0) {
+        __builtin_prefetch(&rho_[size_t(qa)]);
+        __builtin_prefetch(&fsum_[size_t(qa)], 1);
+      }
       if (noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
     }
     const int32_t e = col[i].elem;
