@@ -25,7 +25,12 @@ void ShooterQueue::Build(const std::vector<double>& bounds, const std::vector<do
     weight_[k] = std::max(weight_[2 * k], weight_[2 * k + 1]);
   }
   dirty_.clear();
+  rebuild_ = false;
   visited_ = 0;
+}
+
+void ShooterQueue::Expect(size_t changes) {
+  if (4 * changes > size_t(n_)) rebuild_ = true;
 }
 
 // A bound that grew (light arrived) raises the nodes above it to it, up to
@@ -37,6 +42,7 @@ void ShooterQueue::Leaf(int i, double value) {
   size_t k = leaves_ + size_t(i);
   const double old = tree_[k];
   tree_[k] = value;
+  if (rebuild_) return;  // all at once at the next Best (Expect)
   if (value >= old) {
     for (k >>= 1; k >= 1 && tree_[k] < value; k >>= 1) tree_[k] = value;
     return;
@@ -53,9 +59,10 @@ void ShooterQueue::Leaf(int i, double value) {
 // shot's patches mostly are) list each parent once; out of order they
 // list some twice, which costs a recomputation and changes nothing.
 void ShooterQueue::Flush() {
-  if (4 * dirty_.size() > size_t(n_)) {
+  if (rebuild_ || 4 * dirty_.size() > size_t(n_)) {
     for (size_t k = leaves_; k-- > 1;) tree_[k] = std::max(tree_[2 * k], tree_[2 * k + 1]);
     dirty_.clear();
+    rebuild_ = false;
     return;
   }
   std::vector<int32_t>& level = stack_;

@@ -21,7 +21,8 @@
 // pays O(log n) per take, not a scan of what it holds. A bound that grew
 // reaches the tree's inner nodes at once (as far up as it is the greatest);
 // one that shrank, at the next Best(): level by level from the shrunk
-// leaves, or all at once when more than a quarter of the shooters shrank.
+// leaves, or all at once when more than a quarter of the shooters shrank
+// or are about to change (Expect).
 #ifndef RADIOSITY_SHOOTERS_H
 #define RADIOSITY_SHOOTERS_H
 
@@ -40,6 +41,11 @@ class ShooterQueue {
 
   // Shooter i's bound changed.
   void Set(int i, double bound);
+  // About `changes` Set calls follow: when they are more than a quarter of
+  // the shooters (a small scene, where one column reaches most patches)
+  // the tree is rebuilt at the next Best instead of kept up to date per
+  // change.
+  void Expect(size_t changes);
   // Taken shooters are not chosen until released.
   void Take(int i);
   void Release(int i);
@@ -75,7 +81,8 @@ class ShooterQueue {
   std::vector<double> weight_;  // the same tree of the weights (taken or not)
   std::vector<double> bound_;   // per shooter, taken or not
   std::vector<uint8_t> taken_;
-  std::vector<int32_t> dirty_;  // leaves changed since the last Flush
+  std::vector<int32_t> dirty_;  // leaves shrunk since the last Flush
+  bool rebuild_ = false;        // Expect: every node at the next Flush
   std::vector<int32_t> stack_;  // Best's scratch, and Flush's
   long visited_ = 0;
 };

@@ -331,6 +331,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     if (fsum_[q] == 0) touched_.push_back(q);
     fsum_[q] += f;
   }
+  queue_.Expect(touched_.size() + 1);
   for (size_t i = 0; i < touched_.size(); ++i) {
     if (i + kAhead < touched_.size()) {
       const size_t a = size_t(touched_[i + kAhead]);
