@@ -528,16 +528,15 @@ bool DecodeWork(const std::string& payload, std::vector<Assignment>* m, std::str
 
 // The master's hot path; its loops are GetFormFactors'.
 bool DecodeColumn(const char* data, size_t size, Column* m, std::string* err) {
+  // Into *m itself: a master that decodes into the same Column each time
+  // keeps its form factors' storage (no allocation, no zeroing per shot).
   Reader r(data, size, err);
-  Column c;
-  if (!r.Int32(&c.patch, "patch") || !r.Int32(&c.k, "k")) return false;
-  if (!r.Finite(&c.compute_s, "compute time")) return false;
-  if (!(c.compute_s >= 0)) return r.Fail("compute time is negative");
-  if (!r.Finite(&c.wait_s, "wait time")) return false;
-  if (!(c.wait_s >= 0)) return r.Fail("wait time is negative");
-  if (!GetFormFactors(&r, &c.ff)) return false;
-  *m = std::move(c);
-  return true;
+  if (!r.Int32(&m->patch, "patch") || !r.Int32(&m->k, "k")) return false;
+  if (!r.Finite(&m->compute_s, "compute time")) return false;
+  if (!(m->compute_s >= 0)) return r.Fail("compute time is negative");
+  if (!r.Finite(&m->wait_s, "wait time")) return false;
+  if (!(m->wait_s >= 0)) return r.Fail("wait time is negative");
+  return GetFormFactors(&r, &m->ff);
 }
 
 bool DecodeColumn(const std::string& payload, Column* m, std::string* err) {

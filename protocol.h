@@ -108,6 +108,8 @@ bool DecodeHello(const std::string& payload, Hello* m, std::string* err);
 bool DecodeScene(const std::string& payload, SceneSetup* m, std::string* err);
 bool DecodeReady(const std::string& payload, Ready* m, std::string* err);
 bool DecodeWork(const std::string& payload, std::vector<Assignment>* m, std::string* err);
+// DecodeColumn writes into *m as it reads, reusing m->ff's storage (the
+// master's hot path); on false *m is partly written.
 bool DecodeColumn(const std::string& payload, Column* m, std::string* err);
 // The same on bytes that are not in a string (no copy needed).
 bool DecodeColumn(const char* payload, size_t size, Column* m, std::string* err);

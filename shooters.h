@@ -18,10 +18,11 @@
 // Numbers: bounds and powers are double, as the solver's are.
 // Taken shooters (handed to a worker, not yet shot) are kept out of the
 // tree, so that a scheduler asking for the next one many times per shot
-// pays O(log n) per take, not a scan of what it holds. Changes reach the
-// tree's inner nodes at the next Best(): path by path, or all at once
-// when a shot changed more than a quarter of the shooters (a small scene,
-// where one column reaches most patches).
+// pays O(log n) per take, not a scan of what it holds. A bound that grew
+// reaches the tree's inner nodes at once (as far up as it is the greatest);
+// one that shrank, at the next Best(): level by level from the shrunk
+// leaves, or all at once when more than a quarter of the shooters shrank
+// or are about to change (Expect).
 #ifndef RADIOSITY_SHOOTERS_H
 #define RADIOSITY_SHOOTERS_H
 
@@ -40,10 +41,22 @@ class ShooterQueue {
 
   // Shooter i's bound changed.
   void Set(int i, double bound);
+  // About `changes` Set calls follow: when they are more than a quarter of
+  // the shooters (a small scene, where one column reaches most patches)
+  // the tree is rebuilt at the next Best instead of kept up to date per
+  // change.
+  void Expect(size_t changes);
   // Taken shooters are not chosen until released.
   void Take(int i);
   void Release(int i);
   bool Taken(int i) const { return taken_[i] != 0; }
+  // What Set(i) will touch, fetched early (the owner setting many
+  // shooters scattered over arrays larger than the caches).
+  void Prefetch(int i) const {
+    __builtin_prefetch(&bound_[size_t(i)], 1);
+    __builtin_prefetch(&taken_[size_t(i)]);
+    __builtin_prefetch(&tree_[leaves_ + size_t(i)], 1);
+  }
 
   // The untaken shooter with the greatest power(i) > 0, ties to the lowest
   // id; -1 when none has power above 0. Requires power(i) <= bound(i) +
@@ -60,15 +73,17 @@ class ShooterQueue {
   void Flush();
 
   int n_ = 0;
+  size_t leaves_ = 1;  // n rounded up to a power of two
   // Node 1 is the root, node k's children are 2k and 2k+1, shooter i is
-  // leaf n + i (any n: a complete binary tree of 2n - 1 nodes). A node
-  // holds the greatest bound of the untaken shooters under it.
+  // leaf leaves_ + i (the leaves past n hold -inf). A node holds the
+  // greatest bound of the untaken shooters under it.
   std::vector<double> tree_;
   std::vector<double> weight_;  // the same tree of the weights (taken or not)
   std::vector<double> bound_;   // per shooter, taken or not
   std::vector<uint8_t> taken_;
-  std::vector<int32_t> dirty_;  // leaves changed since the last Flush
-  std::vector<int32_t> stack_;  // Best's scratch
+  std::vector<int32_t> dirty_;  // leaves shrunk since the last Flush
+  bool rebuild_ = false;        // Expect: every node at the next Flush
+  std::vector<int32_t> stack_;  // Best's scratch, and Flush's
   long visited_ = 0;
 };
 
@@ -88,8 +103,8 @@ int ShooterQueue::Best(double drift, const Power& power) {
     stack_.pop_back();
     const double reach = tree_[k] + weight_[k] * drift;
     if (!(reach >= best_power) || (best < 0 && !(reach > 0))) continue;
-    if (k >= size_t(n_)) {
-      const int i = int(k - size_t(n_));
+    if (k >= leaves_) {
+      const int i = int(k - leaves_);
       ++visited_;
       const double p = power(i);
       if (p > best_power || (p == best_power && best >= 0 && i < best)) {

@@ -156,6 +156,7 @@ class Solver {
   std::vector<int> leaves_;         // scratch for Shoot
   std::vector<glm::dvec3> b_;       // per element
   std::vector<int32_t> patch_of_;   // per element, compact for Shoot
+  std::vector<double> elem_area_;   // per element, likewise: its Element's area
   std::vector<glm::dvec3> rho_;     // per patch: its face's, compact for Shoot
   std::vector<glm::dvec3> center_;  // per patch, for the noise's direction
   std::vector<double> area_;        // per patch, likewise
