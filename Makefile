@@ -57,6 +57,10 @@ $(B)/radiosity-master: $(B)/bench/master.o $(LIB_OBJS)
 $(B)/radiosity-cluster: $(B)/bench/cluster.o $(LIB_OBJS) $(SIM_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
+# The master's start-up (load, join, mesh, groups) in CPU seconds.
+$(B)/radiosity-startup: $(B)/bench/startup_cpu.o $(B)/clock.o $(B)/scene.o $(B)/surface.o $(B)/mesh.o $(B)/groups.o $(B)/files.o
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
 # Big generated scenes (rooms of boxes, tessellated shipped scenes) for
 # benchmarks and tests; a stand-alone tool, linked with none of the program.
 $(B)/scenegen: $(B)/bench/scenegen.o
