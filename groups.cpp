@@ -183,6 +183,8 @@ class Grouper {
     }
     elo_.swap(lo2);
     ehi_.swap(hi2);
+    patch_of_.resize(n);
+    for (size_t i = 0; i < n; ++i) patch_of_[i] = m_.elems[size_t(order_[i])].patch;
     levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
     for (size_t i = 0; i < n; ++i) {
       Box& b = levels_[0][i / kLeaf];
@@ -220,45 +222,69 @@ class Grouper {
 
   // The distance from p's centre to the nearest element (bounding box) that
   // p can light: in front of p's plane, facing p, of another patch; G_ /
-  // kGroupReach when none is nearer. Depth first down the tree, the nearer
-  // child first, past every box no nearer than the best so far or wholly
-  // on or behind p's plane (its corner farthest in front is not in front):
-  // the exact least distance, whatever the order of the search.
+  // kGroupReach when none is nearer. Down the tree, past every box no
+  // nearer than the best so far or wholly on or behind p's plane (its
+  // corner farthest in front is not in front): the exact least distance,
+  // whatever the order of the search.
   double Nearest(int p) {
     const PatchInfo& in = info_[size_t(p)];
     double best = G_ / kGroupReach;
     const size_t n = order_.size();
     if (n == 0) return best;
-    auto skip = [&](const Box& b) {
-      if (BoxDistance(b.lo, b.hi, in.c) >= best) return true;
-      const glm::dvec3 far(in.n.x >= 0 ? b.hi.x : b.lo.x, in.n.y >= 0 ? b.hi.y : b.lo.y,
-                           in.n.z >= 0 ? b.hi.z : b.lo.z);
-      return !(glm::dot(in.n, far) - in.offset > eps_);
+    // Best first: the box nearest p's centre next, so that the search
+    // ends at the first box no nearer than the best element so far.
+    heap_.clear();
+    auto push = [&](int level, int i) {
+      const Box& b = levels_[size_t(level)][size_t(i)];
+      const double d = BoxDistance(b.lo, b.hi, in.c);
+      if (d >= best || Side(b.lo, b.hi, in.n, in.offset) < 0) return;
+      heap_.push_back({d, level, i});
+      std::push_heap(heap_.begin(), heap_.end(), Farther);
     };
-    stack_.assign(1, {int(levels_.size()) - 1, 0});
-    while (!stack_.empty()) {
-      const auto [level, i] = stack_.back();
-      stack_.pop_back();
-      if (skip(levels_[size_t(level)][size_t(i)])) continue;
-      if (level == 0) {
-        for (size_t k = size_t(i) * kLeaf, end = std::min(n, k + kLeaf); k < end; ++k) {
+    push(int(levels_.size()) - 1, 0);
+    while (!heap_.empty() && heap_.front().d < best) {
+      std::pop_heap(heap_.begin(), heap_.end(), Farther);
+      const Visit v = heap_.back();
+      heap_.pop_back();
+      if (v.level == 0) {
+        for (size_t k = size_t(v.i) * kLeaf, end = std::min(n, k + kLeaf); k < end; ++k) {
           const double dist = BoxDistance(elo_[k], ehi_[k], in.c);
-          if (dist < best && Lights(p, order_[k])) best = dist;
+          if (dist < best && LightsSlot(p, k)) best = dist;
         }
         continue;
       }
-      const std::vector<Box>& below = levels_[size_t(level) - 1];
-      const int a = 2 * i, b = a + 1;
-      if (size_t(b) >= below.size()) {
-        stack_.push_back({level - 1, a});
-        continue;
-      }
-      const bool a_nearer = BoxDistance(below[size_t(a)].lo, below[size_t(a)].hi, in.c) <=
-                            BoxDistance(below[size_t(b)].lo, below[size_t(b)].hi, in.c);
-      stack_.push_back({level - 1, a_nearer ? b : a});
-      stack_.push_back({level - 1, a_nearer ? a : b});
+      const size_t below = levels_[size_t(v.level) - 1].size();
+      for (int c = 2 * v.i; c <= 2 * v.i + 1 && size_t(c) < below; ++c) push(v.level - 1, c);
     }
     return best;
+  }
+
+  // Where box lo, hi lies against plane dot(n, x) == offset: +1 wholly in
+  // front (every point farther than eps_), -1 wholly not, 0 across. A
+  // corner inside the box is no farther in front than the box's farthest
+  // corner, nor nearer than its nearest (rounding is monotonic), so a
+  // box's answer is its corners' answer.
+  int Side(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec3& n, double offset) const {
+    const glm::dvec3 far(n.x >= 0 ? hi.x : lo.x, n.y >= 0 ? hi.y : lo.y, n.z >= 0 ? hi.z : lo.z);
+    if (!(glm::dot(n, far) - offset > eps_)) return -1;
+    const glm::dvec3 near(n.x >= 0 ? lo.x : hi.x, n.y >= 0 ? lo.y : hi.y, n.z >= 0 ? lo.z : hi.z);
+    return glm::dot(n, near) - offset > eps_ ? 1 : 0;
+  }
+
+  // Lights(p, e) for the element at place k of the tree's order: decided
+  // from the two bounding boxes where they lie wholly on one side of the
+  // other's plane, from the corners only where they do not.
+  bool LightsSlot(int p, size_t k) const {
+    const int q = patch_of_[k];
+    if (q == p) return false;
+    const PatchInfo& in = info_[size_t(p)];
+    const int front = Side(elo_[k], ehi_[k], in.n, in.offset);
+    if (front < 0) return false;
+    const PatchInfo& other = info_[size_t(q)];
+    const int back = Side(in.lo, in.hi, other.n, other.offset);
+    if (back < 0) return false;
+    if (front > 0 && back > 0) return true;
+    return Lights(p, order_[k]);
   }
 
   // May light from patch p reach element e: e of another patch, some
@@ -369,8 +395,14 @@ class Grouper {
   };
   static constexpr size_t kLeaf = 8;         // elements to a leaf of the tree
   std::vector<int> order_;                   // elements in the tree's order
+  std::vector<int> patch_of_;                // ... and their patches
   std::vector<std::vector<Box>> levels_;     // the tree's boxes: leaves first, root last
-  std::vector<std::pair<int, int>> stack_;   // Nearest's: level and box
+  struct Visit {
+    double d;  // the box's distance from the patch's centre
+    int level, i;
+  };
+  static bool Farther(const Visit& a, const Visit& b) { return a.d > b.d; }
+  std::vector<Visit> heap_;                  // Nearest's boxes to look into
   std::vector<uint32_t> stamp_;      // per element: last search that looked at it
   uint32_t stamp_now_ = 0;
 };

@@ -190,14 +190,24 @@ MeshEstimate Estimate(const std::vector<Surface>& surfaces, double ps, int epp) 
 // From the surfaces, as BuildMesh will cut them: a floor of 10^6
 // triangles is one quad's elements, not 10^6 faces' worth.
 MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts) {
+  return EstimateMesh(scene, BuildSurfaces(scene, opts.join), opts);
+}
+
+MeshEstimate EstimateMesh(const Scene& scene, const std::vector<Surface>& surfaces,
+                          const MeshOptions& opts) {
   const double ps =
       opts.patch_size > 0 ? opts.patch_size : glm::length(scene.hi - scene.lo) / 16;
   if (!(ps > 0)) return MeshEstimate();
-  return Estimate(BuildSurfaces(scene, opts.join), ps, opts.elements_per_patch);
+  return Estimate(surfaces, ps, opts.elements_per_patch);
 }
 
 bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
                std::string* err) {
+  return BuildMesh(scene, BuildSurfaces(scene, opts.join), opts, mesh, err);
+}
+
+bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const MeshOptions& opts,
+               Mesh* mesh, std::string* err) {
   *mesh = Mesh();
   mesh->scene_diagonal = glm::length(scene.hi - scene.lo);
   mesh->patch_size = opts.patch_size > 0 ? opts.patch_size : mesh->scene_diagonal / 16;
@@ -207,8 +217,6 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
   }
   const double ps = mesh->patch_size;
   const int epp = opts.elements_per_patch;
-
-  const std::vector<Surface> surfaces = BuildSurfaces(scene, opts.join);
 
   // Count first so an absurd patch size is refused before allocating.
   const MeshEstimate size = Estimate(surfaces, ps, epp);

@@ -29,6 +29,7 @@
 
 #include "hash.h"
 #include "scene.h"
+#include "surface.h"
 
 // A divided element has kChildren consecutive children: a quad 2 x 2 by
 // its edge midpoints and centre, a triangle into four by its edge midpoints.
@@ -167,6 +168,11 @@ struct Mesh {
 // the element count a patch size implies is larger than kMaxElements.
 bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
                std::string* err);
+// The same from the scene's surfaces, BuildSurfaces(scene, opts.join):
+// for a caller that checks EstimateMesh first, so the faces are joined
+// once (joining is most of the estimate).
+bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const MeshOptions& opts,
+               Mesh* mesh, std::string* err);
 
 // The elements and vertices BuildMesh would make at most (before making
 // any): a face's extent over the patch size, cut as BuildMesh cuts it.
@@ -174,6 +180,8 @@ struct MeshEstimate {
   double elements = 0, vertices = 0;
 };
 MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts);
+MeshEstimate EstimateMesh(const Scene& scene, const std::vector<Surface>& surfaces,
+                          const MeshOptions& opts);
 
 // The most elements a mesh may have, built or divided. A run needs about
 // 0.85 KB per element (1.2 KB with subdivision's edge maps; measured on a
