@@ -76,12 +76,17 @@ class Joiner {
     const size_t n = scene_.faces.size();
     PointIds ids(&verts_);
     std::vector<uint64_t> used;  // every face's edges, undirected
+    size_t corners = 0;
+    for (const Face& face : scene_.faces) corners += face.verts.size();
+    used.reserve(corners);
+    edges_.reserve(corners);
     pieces_.resize(n);
     piece_of_.resize(n);
     for (size_t f = 0; f < n; ++f) {
       const Face& face = scene_.faces[f];
       Piece& p = pieces_[f];
       p.faces = {int(f)};
+      p.loop.reserve(face.verts.size());
       p.area_vec = face.normal * face.area;
       p.area = face.area;
       glm::dvec3 c(0.0);
@@ -244,15 +249,22 @@ class Joiner {
       int a, b;
       double shared;
     };
+    if (!open_ready_) {  // the first pass: the edges between faces of one group
+      for (size_t i = 0; i < edges_.size(); ++i)
+        if (twin_[i] >= 0 && Find(twin_[i]) == Find(edges_[i].second)) open_.push_back(int(i));
+      open_ready_ = true;
+    }
     std::vector<Pair> pairs;
-    for (size_t i = 0; i < edges_.size(); ++i) {
-      const auto& [key, f] = edges_[i];
+    size_t kept = 0;  // an edge inside one piece stays inside: dropped, in order
+    for (const int i : open_) {
+      const auto& [key, f] = edges_[size_t(i)];
+      const int pf = piece_of_[f], pg = piece_of_[twin_[size_t(i)]];
+      if (pf == pg) continue;
+      open_[kept++] = i;
       const int a = int(key >> 32), b = int(uint32_t(key));
-      const int g = twin_[i];
-      if (g < 0 || Find(g) != Find(f)) continue;
-      const int pf = piece_of_[f], pg = piece_of_[g];
       if (pf < pg) pairs.push_back({pf, pg, glm::length(verts_[b] - verts_[a])});
     }
+    open_.resize(kept);
     std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
       return x.a != y.a ? x.a < y.a : x.b < y.b;
     });
@@ -278,7 +290,8 @@ class Joiner {
       }
       any = true;
     }
-    for (Piece& p : pieces_) p.pass_version = p.version;
+    for (const int i : joined_) pieces_[size_t(i)].pass_version = pieces_[size_t(i)].version;
+    joined_.clear();
     return any;
   }
 
@@ -332,6 +345,7 @@ class Joiner {
     p.lo = lo;
     p.hi = hi;
     ++p.version;
+    joined_.push_back(ia);
     q.alive = false;
     q.loop.clear();
     q.faces.clear();
@@ -387,6 +401,9 @@ class Joiner {
   std::vector<std::pair<uint64_t, int>> edges_;  // directed edge -> face, sorted
   std::vector<int> from_;  // per vertex: its first edge in edges_; one more at the end
   std::vector<int> twin_;  // per edge: the face with its reverse (FaceWith), or -1
+  std::vector<int> open_;  // edges (edges_ order) between two pieces of one group (Pass)
+  bool open_ready_ = false;
+  std::vector<int> joined_;  // pieces joined into this pass (their versions moved)
   std::unordered_set<std::array<int, 4>, KeyHash> failed_;  // pairs tried as they are
 };
 
