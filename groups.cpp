@@ -149,7 +149,9 @@ class Grouper {
       // cast the shadows of one point over several patches' width.
       const double size = glm::length(in.hi - in.lo);
       if (size > kSmallPatch * m_.patch_size) continue;
-      in.limit = std::min(G_, kGroupReach * Nearest(int(p)));
+      // Only a candidate's limit is used: the search may stop once p is
+      // sure not to be one.
+      in.limit = std::min(G_, kGroupReach * Nearest(int(p), size));
       in.candidate = size <= in.limit;
     }
   }
@@ -225,8 +227,10 @@ class Grouper {
   // kGroupReach when none is nearer. Down the tree, past every box no
   // nearer than the best so far or wholly on or behind p's plane (its
   // corner farthest in front is not in front): the exact least distance,
-  // whatever the order of the search.
-  double Nearest(int p) {
+  // whatever the order of the search; or, as soon as one is found nearer
+  // than `size` / kGroupReach (p is too wide to be a candidate then: the
+  // least is nearer still), that one.
+  double Nearest(int p, double size) {
     const PatchInfo& in = info_[size_t(p)];
     double best = G_ / kGroupReach;
     const size_t n = order_.size();
@@ -251,6 +255,7 @@ class Grouper {
           const double dist = BoxDistance(elo_[k], ehi_[k], in.c);
           if (dist < best && LightsSlot(p, k)) best = dist;
         }
+        if (kGroupReach * best < size) return best;
         continue;
       }
       const size_t below = levels_[size_t(v.level) - 1].size();
