@@ -125,19 +125,7 @@ class Grouper {
   // Every element's bounding box, and a tree of them; then each patch's
   // limit from the nearest element it can light.
   void IndexElements() {
-    elo_.resize(m_.elems.size());
-    ehi_.resize(m_.elems.size());
     stamp_.assign(m_.elems.size(), 0);
-    for (size_t e = 0; e < m_.elems.size(); ++e) {
-      const Element& el = m_.elems[e];
-      glm::dvec3 lo = m_.verts[el.v[0]], hi = lo;
-      for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k) {
-        lo = glm::min(lo, m_.verts[el.v[k]]);
-        hi = glm::max(hi, m_.verts[el.v[k]]);
-      }
-      elo_[e] = lo;
-      ehi_[e] = hi;
-    }
     BuildTree();
     for (size_t p = 0; p < info_.size(); ++p) {
       PatchInfo& in = info_[p];
@@ -160,33 +148,43 @@ class Grouper {
   // Morton order of their boxes' centres, kLeaf to a leaf, each level
   // above the union of two boxes of the one below, up to one root.
   void BuildTree() {
-    const size_t n = elo_.size();
-    glm::dvec3 lo = elo_.empty() ? glm::dvec3(0.0) : elo_[0], hi = lo;
+    const size_t n = m_.elems.size();
+    // An element's bounding box, made again where needed rather than
+    // kept by id beside the boxes in the tree's order.
+    auto bound = [&](size_t e, glm::dvec3* lo, glm::dvec3* hi) {
+      const Element& el = m_.elems[e];
+      *lo = *hi = m_.verts[size_t(el.v[0])];
+      for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k) {
+        *lo = glm::min(*lo, m_.verts[size_t(el.v[k])]);
+        *hi = glm::max(*hi, m_.verts[size_t(el.v[k])]);
+      }
+    };
+    glm::dvec3 lo(0.0), hi(0.0), a, b;
     for (size_t e = 0; e < n; ++e) {
-      lo = glm::min(lo, elo_[e]);
-      hi = glm::max(hi, ehi_[e]);
+      bound(e, &a, &b);
+      lo = e ? glm::min(lo, a) : a;
+      hi = e ? glm::max(hi, b) : b;
     }
     const glm::dvec3 scale = double(1 << 21) / glm::max(hi - lo, glm::dvec3(1e-300));
     std::vector<std::pair<uint64_t, int>> keyed(n);
     for (size_t e = 0; e < n; ++e) {
-      const glm::dvec3 q = glm::clamp((0.5 * (elo_[e] + ehi_[e]) - lo) * scale, 0.0,
-                                      double((1 << 21) - 1));
+      bound(e, &a, &b);
+      const glm::dvec3 q = glm::clamp((0.5 * (a + b) - lo) * scale, 0.0, double((1 << 21) - 1));
       keyed[e] = {Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 | Spread(uint64_t(q.z)) << 2,
                   int(e)};
     }
     std::sort(keyed.begin(), keyed.end());
-    // The boxes in the tree's order too: a leaf's are read in a row.
+    // The boxes in the tree's order: a leaf's are read in a row.
     order_.resize(n);
-    std::vector<glm::dvec3> lo2(n), hi2(n);
+    elo_.resize(n);
+    ehi_.resize(n);
+    patch_of_.resize(n);
     for (size_t i = 0; i < n; ++i) {
       order_[i] = keyed[i].second;
-      lo2[i] = elo_[size_t(order_[i])];
-      hi2[i] = ehi_[size_t(order_[i])];
+      bound(size_t(order_[i]), &elo_[i], &ehi_[i]);
+      patch_of_[i] = m_.elems[size_t(order_[i])].patch;
     }
-    elo_.swap(lo2);
-    ehi_.swap(hi2);
-    patch_of_.resize(n);
-    for (size_t i = 0; i < n; ++i) patch_of_[i] = m_.elems[size_t(order_[i])].patch;
+    std::vector<std::pair<uint64_t, int>>().swap(keyed);
     levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
     for (size_t i = 0; i < n; ++i) {
       Box& b = levels_[0][i / kLeaf];
@@ -394,7 +392,7 @@ class Grouper {
   double G_, C_, tau_, lift_, eps_;
   std::vector<PatchInfo> info_;
   Grid grid_;                        // elements by the cells of C_ they overlap (Clear)
-  std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes, by id, then in order_
+  std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes, in order_
   struct Box {
     glm::dvec3 lo{0.0}, hi{0.0};
   };
