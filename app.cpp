@@ -23,6 +23,7 @@
 #include "memory.h"
 #include "pool.h"
 #include "ssh.h"
+#include "surface.h"
 #include "worker.h"
 
 namespace {
@@ -163,11 +164,16 @@ void MasterRun::Build() {
   // Refused here rather than killed by the kernel later; and subdivision
   // stops (with its warning) where the memory would run out.
   const double usable = UsableMemory();
-  if (!FitsInMemory(EstimateMesh(scene_, opts_.mesh).elements, kMasterBytesPerElement, usable,
-                    &err))
-    Die(kExitUsage, opts_.scene_path + ": " + err);
-  sub_limit_ = std::min(opts_.sub.max_elements, long(usable / kMasterBytesPerElement));
-  if (!BuildMesh(scene_, opts_.mesh, &mesh_, &err)) Die(kExitUsage, opts_.scene_path + ": " + err);
+  {
+    // Joined once for the estimate and the mesh, and let go once meshed.
+    const std::vector<Surface> surfaces = BuildSurfaces(scene_, opts_.mesh.join);
+    if (!FitsInMemory(EstimateMesh(scene_, surfaces, opts_.mesh).elements, kMasterBytesPerElement,
+                      usable, &err))
+      Die(kExitUsage, opts_.scene_path + ": " + err);
+    sub_limit_ = std::min(opts_.sub.max_elements, long(usable / kMasterBytesPerElement));
+    if (!BuildMesh(scene_, surfaces, opts_.mesh, &mesh_, &err))
+      Die(kExitUsage, opts_.scene_path + ": " + err);
+  }
   const double t2 = MonotonicSeconds();
   if (opts_.verbosity >= 2)
     std::fprintf(stderr,

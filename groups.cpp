@@ -123,29 +123,11 @@ class Grouper {
     }
   }
 
-  // Every element by the cells of C_ and of the patch size its bounding box
-  // overlaps; then each
-  // patch's limit from the nearest element it can light.
+  // Every element's bounding box, and a tree of them; then each patch's
+  // limit from the nearest element it can light.
   void IndexElements() {
-    elo_.resize(m_.elems.size());
-    ehi_.resize(m_.elems.size());
     stamp_.assign(m_.elems.size(), 0);
-    for (size_t e = 0; e < m_.elems.size(); ++e) {
-      const Element& el = m_.elems[e];
-      glm::dvec3 lo = m_.verts[el.v[0]], hi = lo;
-      for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k) {
-        lo = glm::min(lo, m_.verts[el.v[k]]);
-        hi = glm::max(hi, m_.verts[el.v[k]]);
-      }
-      elo_[e] = lo;
-      ehi_[e] = hi;
-      for (auto [grid, cell] : {std::make_pair(&grid_, C_), std::make_pair(&coarse_, m_.patch_size)}) {
-        const Cell a = CellOf(lo, cell), b = CellOf(hi, cell);
-        for (int64_t x = a.x; x <= b.x; ++x)
-          for (int64_t y = a.y; y <= b.y; ++y)
-            for (int64_t z = a.z; z <= b.z; ++z) (*grid)[{x, y, z}].push_back(int(e));
-      }
-    }
+    BuildTree();
     for (size_t p = 0; p < info_.size(); ++p) {
       PatchInfo& in = info_[p];
       // Emitters shoot alone: their direct light is most of the answer.
@@ -156,48 +138,157 @@ class Grouper {
       // cast the shadows of one point over several patches' width.
       const double size = glm::length(in.hi - in.lo);
       if (size > kSmallPatch * m_.patch_size) continue;
-      in.limit = std::min(G_, kGroupReach * Nearest(int(p)));
+      // Only a candidate's limit is used: the search may stop once p is
+      // sure not to be one.
+      in.limit = std::min(G_, kGroupReach * Nearest(int(p), size));
       in.candidate = size <= in.limit;
     }
   }
 
+  // A bounding-volume tree of the elements' boxes: the elements in the
+  // Morton order of their boxes' centres, kLeaf to a leaf, each level
+  // above the union of two boxes of the one below, up to one root.
+  void BuildTree() {
+    const size_t n = m_.elems.size();
+    // An element's bounding box, made again where needed rather than
+    // kept by id beside the boxes in the tree's order.
+    auto bound = [&](size_t e, glm::dvec3* lo, glm::dvec3* hi) {
+      const Element& el = m_.elems[e];
+      *lo = *hi = m_.verts[size_t(el.v[0])];
+      for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k) {
+        *lo = glm::min(*lo, m_.verts[size_t(el.v[k])]);
+        *hi = glm::max(*hi, m_.verts[size_t(el.v[k])]);
+      }
+    };
+    glm::dvec3 lo(0.0), hi(0.0), a, b;
+    for (size_t e = 0; e < n; ++e) {
+      bound(e, &a, &b);
+      lo = e ? glm::min(lo, a) : a;
+      hi = e ? glm::max(hi, b) : b;
+    }
+    const glm::dvec3 scale = double(1 << 21) / glm::max(hi - lo, glm::dvec3(1e-300));
+    std::vector<std::pair<uint64_t, int>> keyed(n);
+    for (size_t e = 0; e < n; ++e) {
+      bound(e, &a, &b);
+      const glm::dvec3 q = glm::clamp((0.5 * (a + b) - lo) * scale, 0.0, double((1 << 21) - 1));
+      keyed[e] = {Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 | Spread(uint64_t(q.z)) << 2,
+                  int(e)};
+    }
+    std::sort(keyed.begin(), keyed.end());
+    // The boxes in the tree's order: a leaf's are read in a row.
+    order_.resize(n);
+    elo_.resize(n);
+    ehi_.resize(n);
+    patch_of_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      order_[i] = keyed[i].second;
+      bound(size_t(order_[i]), &elo_[i], &ehi_[i]);
+      patch_of_[i] = m_.elems[size_t(order_[i])].patch;
+    }
+    std::vector<std::pair<uint64_t, int>>().swap(keyed);
+    levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
+    for (size_t i = 0; i < n; ++i) {
+      Box& b = levels_[0][i / kLeaf];
+      b.lo = i % kLeaf ? glm::min(b.lo, elo_[i]) : elo_[i];
+      b.hi = i % kLeaf ? glm::max(b.hi, ehi_[i]) : ehi_[i];
+    }
+    while (levels_.back().size() > 1) {
+      const std::vector<Box>& below = levels_.back();
+      std::vector<Box> up((below.size() + 1) / 2);
+      for (size_t i = 0; i < below.size(); ++i) {
+        Box& b = up[i / 2];
+        b.lo = i % 2 ? glm::min(b.lo, below[i].lo) : below[i].lo;
+        b.hi = i % 2 ? glm::max(b.hi, below[i].hi) : below[i].hi;
+      }
+      levels_.push_back(std::move(up));
+    }
+  }
+
+  // The bits of x (21) spread to every third bit: one axis of a Morton code.
+  static uint64_t Spread(uint64_t x) {
+    x &= 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffull;
+    x = (x | x << 16) & 0x1f0000ff0000ffull;
+    x = (x | x << 8) & 0x100f00f00f00f00full;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+  }
+
+  // The distance from c to box lo, hi (0 inside). Rounding keeps it
+  // monotonic: a box holding another is never farther than it.
+  static double BoxDistance(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec3& c) {
+    return glm::length(glm::max(glm::max(lo - c, c - hi), 0.0));
+  }
+
   // The distance from p's centre to the nearest element (bounding box) that
   // p can light: in front of p's plane, facing p, of another patch; G_ /
-  // kGroupReach when none is nearer. Found ring by ring of cells about the
-  // centre: after ring r every element nearer than r·cell has been seen.
-  // Near receivers in the fine grid, up to kFineRings rings; farther ones,
-  // when none is near, in the coarse grid (cell: the patch size), so that
-  // a search out to G_ / kGroupReach looks at 9^3 cells, not 65^3.
-  double Nearest(int p) {
+  // kGroupReach when none is nearer. Down the tree, past every box no
+  // nearer than the best so far or wholly on or behind p's plane (its
+  // corner farthest in front is not in front): the exact least distance,
+  // whatever the order of the search; or, as soon as one is found nearer
+  // than `size` / kGroupReach (p is too wide to be a candidate then: the
+  // least is nearer still), that one.
+  double Nearest(int p, double size) {
+    const PatchInfo& in = info_[size_t(p)];
     double best = G_ / kGroupReach;
-    ++stamp_now_;
-    Rings(p, grid_, C_, kFineRings, &best);
-    if (best > kFineRings * C_) Rings(p, coarse_, m_.patch_size, -1, &best);
+    const size_t n = order_.size();
+    if (n == 0) return best;
+    // Best first: the box nearest p's centre next, so that the search
+    // ends at the first box no nearer than the best element so far.
+    heap_.clear();
+    auto push = [&](int level, int i) {
+      const Box& b = levels_[size_t(level)][size_t(i)];
+      const double d = BoxDistance(b.lo, b.hi, in.c);
+      if (d >= best || Side(b.lo, b.hi, in.n, in.offset) < 0) return;
+      heap_.push_back({d, level, i});
+      std::push_heap(heap_.begin(), heap_.end(), Farther);
+    };
+    push(int(levels_.size()) - 1, 0);
+    while (!heap_.empty() && heap_.front().d < best) {
+      std::pop_heap(heap_.begin(), heap_.end(), Farther);
+      const Visit v = heap_.back();
+      heap_.pop_back();
+      if (v.level == 0) {
+        for (size_t k = size_t(v.i) * kLeaf, end = std::min(n, k + kLeaf); k < end; ++k) {
+          const double dist = BoxDistance(elo_[k], ehi_[k], in.c);
+          if (dist < best && LightsSlot(p, k)) best = dist;
+        }
+        if (kGroupReach * best < size) return best;
+        continue;
+      }
+      const size_t below = levels_[size_t(v.level) - 1].size();
+      for (int c = 2 * v.i; c <= 2 * v.i + 1 && size_t(c) < below; ++c) push(v.level - 1, c);
+    }
     return best;
   }
 
-  // Rings 0, 1, ... (to `last`; -1: as far as needed) of grid cells about
-  // p's centre, lowering *best to the nearest element p lights.
-  void Rings(int p, const Grid& grid, double cell, int64_t last, double* best) {
+  // Where box lo, hi lies against plane dot(n, x) == offset: +1 wholly in
+  // front (every point farther than eps_), -1 wholly not, 0 across. A
+  // corner inside the box is no farther in front than the box's farthest
+  // corner, nor nearer than its nearest (rounding is monotonic), so a
+  // box's answer is its corners' answer.
+  int Side(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec3& n, double offset) const {
+    const glm::dvec3 far(n.x >= 0 ? hi.x : lo.x, n.y >= 0 ? hi.y : lo.y, n.z >= 0 ? hi.z : lo.z);
+    if (!(glm::dot(n, far) - offset > eps_)) return -1;
+    const glm::dvec3 near(n.x >= 0 ? lo.x : hi.x, n.y >= 0 ? lo.y : hi.y, n.z >= 0 ? lo.z : hi.z);
+    return glm::dot(n, near) - offset > eps_ ? 1 : 0;
+  }
+
+  // Lights(p, e) for the element at place k of the tree's order: decided
+  // from the two bounding boxes where they lie wholly on one side of the
+  // other's plane, from the corners only where they do not.
+  bool LightsSlot(int p, size_t k) const {
+    const int q = patch_of_[k];
+    if (q == p) return false;
     const PatchInfo& in = info_[size_t(p)];
-    const Cell c0 = CellOf(in.c, cell);
-    // An element at distance δ lies in ring floor(δ / cell) + 1 or nearer.
-    for (int64_t r = 0; double(r - 1) * cell < *best && (last < 0 || r <= last); ++r)
-      for (int64_t dx = -r; dx <= r; ++dx)
-        for (int64_t dy = -r; dy <= r; ++dy) {
-          const bool side = std::abs(dx) == r || std::abs(dy) == r;
-          for (int64_t dz = -r; dz <= r; dz += side || r == 0 ? 1 : 2 * r) {
-            auto it = grid.find({c0.x + dx, c0.y + dy, c0.z + dz});
-            if (it == grid.end()) continue;
-            for (int e : it->second) {
-              if (stamp_[size_t(e)] == stamp_now_) continue;
-              stamp_[size_t(e)] = stamp_now_;
-              const glm::dvec3 d = glm::max(glm::max(elo_[e] - in.c, in.c - ehi_[e]), 0.0);
-              const double dist = glm::length(d);
-              if (dist < *best && Lights(p, e)) *best = dist;
-            }
-          }
-        }
+    const int front = Side(elo_[k], ehi_[k], in.n, in.offset);
+    if (front < 0) return false;
+    const PatchInfo& other = info_[size_t(q)];
+    const int back = Side(in.lo, in.hi, other.n, other.offset);
+    if (back < 0) return false;
+    if (front > 0 && back > 0) return true;
+    return Lights(p, order_[k]);
   }
 
   // May light from patch p reach element e: e of another patch, some
@@ -228,10 +319,23 @@ class Grouper {
     return Clear(a, b);
   }
 
+  // Every element by the cells of C_ its bounding box overlaps (in the
+  // tree's order: Clear's answer does not depend on it): made when the
+  // first pair is tested (a scene where no two candidates meet needs none).
+  void IndexGrid() {
+    for (size_t k = 0; k < order_.size(); ++k) {
+      const Cell a = CellOf(elo_[k], C_), b = CellOf(ehi_[k], C_);
+      for (int64_t x = a.x; x <= b.x; ++x)
+        for (int64_t y = a.y; y <= b.y; ++y)
+          for (int64_t z = a.z; z <= b.z; ++z) grid_[{x, y, z}].push_back(order_[k]);
+    }
+  }
+
   // The segment between the lifted centres of a and b crosses no element
   // of another patch: the cells it passes through, walked in order
   // (Amanatides & Woo), hold every element it could cross.
   bool Clear(int a, int b) {
+    if (grid_.empty()) IndexGrid();
     const glm::dvec3 P = info_[a].c + lift_ * info_[a].n;
     const glm::dvec3 Q = info_[b].c + lift_ * info_[b].n;
     const glm::dvec3 d = Q - P;
@@ -288,9 +392,21 @@ class Grouper {
   const Mesh& m_;
   double G_, C_, tau_, lift_, eps_;
   std::vector<PatchInfo> info_;
-  Grid grid_;                        // elements by the cells of C_ they overlap
-  Grid coarse_;                      // ... and by those of the patch size
-  std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes
+  Grid grid_;                        // elements by the cells of C_ they overlap (Clear)
+  std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes, in order_
+  struct Box {
+    glm::dvec3 lo{0.0}, hi{0.0};
+  };
+  static constexpr size_t kLeaf = 8;         // elements to a leaf of the tree
+  std::vector<int> order_;                   // elements in the tree's order
+  std::vector<int> patch_of_;                // ... and their patches
+  std::vector<std::vector<Box>> levels_;     // the tree's boxes: leaves first, root last
+  struct Visit {
+    double d;  // the box's distance from the patch's centre
+    int level, i;
+  };
+  static bool Farther(const Visit& a, const Visit& b) { return a.d > b.d; }
+  std::vector<Visit> heap_;                  // Nearest's boxes to look into
   std::vector<uint32_t> stamp_;      // per element: last search that looked at it
   uint32_t stamp_now_ = 0;
 };

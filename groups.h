@@ -49,7 +49,6 @@ constexpr double kGroupPatches = 4.0; // default G, in patch sizes
 constexpr double kSmallPatch = 0.5;   // the widest patch that may group, in patch sizes
 constexpr int kMaxGroup = 64;         // members of a group, at most
 constexpr int kLookAhead = 512;       // candidates looked at past a group's first member
-constexpr int kFineRings = 3;         // rings of the fine grid (patch size / 8) searched for receivers
 
 // Fills mesh->groups and mesh->group_of for the patches as built (no
 // groups when !opts.groups). Subdivision divides elements, not patches,

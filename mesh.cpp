@@ -9,6 +9,7 @@
 #include "check.h"
 #include "groups.h"
 #include "hash.h"
+#include "point_ids.h"
 #include "surface.h"
 
 bool LexLess(const glm::dvec3& a, const glm::dvec3& b) {
@@ -32,49 +33,6 @@ double ElementArea(const Mesh& m, const Element& e) {
 }
 
 namespace {
-
-// Vertex ids of one input face: points are welded by exact value so that
-// the pieces of a split polygon share their common edges. An
-// open-addressing table of ids, kept from face to face (a hash map per
-// face cost a third of BuildMesh at 10^6 faces).
-class FaceVerts {
- public:
-  explicit FaceVerts(std::vector<glm::dvec3>* verts) : verts_(verts) {}
-  void NextFace() {
-    for (size_t i : used_) table_[i] = -1;
-    used_.clear();
-  }
-  int Id(const glm::dvec3& p) {
-    if (2 * (used_.size() + 1) > table_.size()) Grow();
-    const size_t mask = table_.size() - 1;
-    size_t i = PointHash()(p) & mask;
-    for (; table_[i] >= 0; i = (i + 1) & mask)
-      if ((*verts_)[table_[i]] == p) return table_[i];
-    table_[i] = int(verts_->size());
-    used_.push_back(i);
-    verts_->push_back(p);
-    return table_[i];
-  }
-
- private:
-  void Grow() {
-    std::vector<int> ids;
-    for (size_t i : used_) ids.push_back(table_[i]);
-    table_.assign(std::max<size_t>(64, 2 * table_.size()), -1);
-    used_.clear();
-    const size_t mask = table_.size() - 1;
-    for (int id : ids) {
-      size_t i = PointHash()((*verts_)[id]) & mask;
-      while (table_[i] >= 0) i = (i + 1) & mask;
-      table_[i] = id;
-      used_.push_back(i);
-    }
-  }
-
-  std::vector<glm::dvec3>* verts_;
-  std::vector<int> table_;
-  std::vector<size_t> used_;
-};
 
 bool Convex(const std::vector<glm::dvec3>& q, const glm::dvec3& n) {
   for (size_t i = 0; i < q.size(); ++i) {
@@ -124,7 +82,7 @@ struct Builder {
   Mesh* m;
   int face;
   int epp;  // elements per patch edge
-  FaceVerts* fv;
+  PointIds* fv;  // the face's vertices, welded by value so that pieces share edges
   std::unordered_map<long long, int> patch_of;  // coarse cell -> patch id
   // The face's patches' top elements as they come (a face's elements
   // interleave its patches), until Finish() lays them out in patch order.
@@ -247,14 +205,24 @@ MeshEstimate Estimate(const std::vector<Surface>& surfaces, double ps, int epp) 
 // From the surfaces, as BuildMesh will cut them: a floor of 10^6
 // triangles is one quad's elements, not 10^6 faces' worth.
 MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts) {
+  return EstimateMesh(scene, BuildSurfaces(scene, opts.join), opts);
+}
+
+MeshEstimate EstimateMesh(const Scene& scene, const std::vector<Surface>& surfaces,
+                          const MeshOptions& opts) {
   const double ps =
       opts.patch_size > 0 ? opts.patch_size : glm::length(scene.hi - scene.lo) / 16;
   if (!(ps > 0)) return MeshEstimate();
-  return Estimate(BuildSurfaces(scene, opts.join), ps, opts.elements_per_patch);
+  return Estimate(surfaces, ps, opts.elements_per_patch);
 }
 
 bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
                std::string* err, const std::function<void()>& read) {
+  return BuildMesh(scene, BuildSurfaces(scene, opts.join), opts, mesh, err, read);
+}
+
+bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const MeshOptions& opts,
+               Mesh* mesh, std::string* err, const std::function<void()>& read) {
   *mesh = Mesh();
   mesh->scene_diagonal = glm::length(scene.hi - scene.lo);
   mesh->patch_size = opts.patch_size > 0 ? opts.patch_size : mesh->scene_diagonal / 16;
@@ -264,8 +232,6 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
   }
   const double ps = mesh->patch_size;
   const int epp = opts.elements_per_patch;
-
-  const std::vector<Surface> surfaces = BuildSurfaces(scene, opts.join);
 
   // Count first so an absurd patch size is refused before allocating.
   const MeshEstimate size = Estimate(surfaces, ps, epp);
@@ -300,7 +266,7 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
   }
 
   if (read) read();
-  FaceVerts fv(&mesh->verts);
+  PointIds fv(&mesh->verts);
   for (const Surface& f : surfaces) {
     const Material& mat = scene.materials[f.material];
     MeshFace mf;
@@ -317,7 +283,7 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
     mesh->faces.push_back(std::move(mf));
 
     mesh->faces[face].vbegin = int(mesh->verts.size());
-    fv.NextFace();
+    fv.Clear();
     Builder b{mesh, face, epp, &fv, {}, {}, -1};
     const auto& v = f.poly;
     if (v.size() == 3) {

@@ -30,6 +30,7 @@
 
 #include "hash.h"
 #include "scene.h"
+#include "surface.h"
 
 // A divided element has kChildren consecutive children: a quad 2 x 2 by
 // its edge midpoints and centre, a triangle into four by its edge midpoints.
@@ -201,6 +202,11 @@ struct Mesh {
 // its peak is the mesh built beside the scene).
 bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
                std::string* err, const std::function<void()>& read = nullptr);
+// The same from the scene's surfaces, BuildSurfaces(scene, opts.join):
+// for a caller that checks EstimateMesh first, so the faces are joined
+// once (joining is most of the estimate).
+bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const MeshOptions& opts,
+               Mesh* mesh, std::string* err, const std::function<void()>& read = nullptr);
 
 // The elements and vertices BuildMesh would make at most (before making
 // any): a face's extent over the patch size, cut as BuildMesh cuts it.
@@ -208,6 +214,8 @@ struct MeshEstimate {
   double elements = 0, vertices = 0;
 };
 MeshEstimate EstimateMesh(const Scene& scene, const MeshOptions& opts);
+MeshEstimate EstimateMesh(const Scene& scene, const std::vector<Surface>& surfaces,
+                          const MeshOptions& opts);
 
 // The most elements a mesh may have, built or divided. The master needs
 // about 0.4 KB per element (memory.h), so this is about 3.5 GB.

@@ -9,6 +9,7 @@
 
 #include "hash.h"
 #include "mesh.h"
+#include "point_ids.h"
 
 namespace {
 
@@ -73,22 +74,25 @@ class Joiner {
  private:
   void Weld() {
     const size_t n = scene_.faces.size();
-    std::unordered_map<glm::dvec3, int, PointHash> ids;
+    PointIds ids(&verts_);
     std::vector<uint64_t> used;  // every face's edges, undirected
+    size_t corners = 0;
+    for (const Face& face : scene_.faces) corners += face.verts.size();
+    used.reserve(corners);
+    edges_.reserve(corners);
     pieces_.resize(n);
     piece_of_.resize(n);
     for (size_t f = 0; f < n; ++f) {
       const Face& face = scene_.faces[f];
       Piece& p = pieces_[f];
       p.faces = {int(f)};
+      p.loop.reserve(face.verts.size());
       p.area_vec = face.normal * face.area;
       p.area = face.area;
       glm::dvec3 c(0.0);
       p.lo = p.hi = face.verts[0];
       for (const glm::dvec3& v : face.verts) {
-        auto [it, added] = ids.try_emplace(v, int(verts_.size()));
-        if (added) verts_.push_back(v);
-        p.loop.push_back(it->second);
+        p.loop.push_back(ids.Id(v));
         c += v;
         p.lo = glm::min(p.lo, v);
         p.hi = glm::max(p.hi, v);
@@ -114,15 +118,29 @@ class Joiner {
     // on the line where a floor was cut): no join across it, or elements
     // would reach from one side of the wall to the other.
     std::sort(used.begin(), used.end());
-    edges_.erase(std::remove_if(edges_.begin(), edges_.end(),
-                                [&](const std::pair<uint64_t, int>& e) {
-                                  const int a = int(e.first >> 32), b = int(uint32_t(e.first));
-                                  const auto r = std::equal_range(
-                                      used.begin(), used.end(), a < b ? e.first : EdgeKey(b, a));
-                                  return r.second - r.first > 2;
-                                }),
-                 edges_.end());
+    std::vector<uint64_t> crowded;  // sorted: those of more than two faces (few)
+    for (size_t i = 0; i + 2 < used.size(); ++i)
+      if (used[i] == used[i + 2] && (crowded.empty() || crowded.back() != used[i]))
+        crowded.push_back(used[i]);
+    std::vector<uint64_t>().swap(used);
+    if (!crowded.empty())
+      edges_.erase(std::remove_if(edges_.begin(), edges_.end(),
+                                  [&](const std::pair<uint64_t, int>& e) {
+                                    const int a = int(e.first >> 32), b = int(uint32_t(e.first));
+                                    return std::binary_search(crowded.begin(), crowded.end(),
+                                                              a < b ? e.first : EdgeKey(b, a));
+                                  }),
+                   edges_.end());
     std::sort(edges_.begin(), edges_.end());
+    // Where each vertex's edges begin (edges_ is sorted by the first
+    // vertex), and each edge's reverse: FaceWith in a few steps, and
+    // each pass without a search.
+    from_.assign(verts_.size() + 1, 0);
+    for (const auto& e : edges_) ++from_[size_t(e.first >> 32) + 1];
+    for (size_t v = 0; v < verts_.size(); ++v) from_[v + 1] += from_[v];
+    twin_.resize(edges_.size());
+    for (size_t i = 0; i < edges_.size(); ++i)
+      twin_[i] = FaceWith(int(uint32_t(edges_[i].first)), int(edges_[i].first >> 32));
   }
 
   // Faces f and g face the same way and each one's corners lie within the
@@ -149,8 +167,8 @@ class Joiner {
   void Group() {
     group_.resize(scene_.faces.size());
     for (size_t f = 0; f < group_.size(); ++f) group_[f] = int(f);
-    for (const auto& [key, f] : edges_) {
-      const int g = FaceWith(int(uint32_t(key)), int(key >> 32));
+    for (size_t i = 0; i < edges_.size(); ++i) {
+      const int f = edges_[i].second, g = twin_[i];
       if (g < 0 || scene_.faces[g].material != scene_.faces[f].material || !Coplanar(f, g))
         continue;
       const int a = Find(f), b = Find(g);
@@ -218,8 +236,9 @@ class Joiner {
   // repeat an edge).
   int FaceWith(int a, int b) const {
     const uint64_t key = EdgeKey(a, b);
-    auto it = std::lower_bound(edges_.begin(), edges_.end(), std::make_pair(key, -1));
-    return it != edges_.end() && it->first == key ? it->second : -1;
+    for (int i = from_[size_t(a)]; i < from_[size_t(a) + 1]; ++i)
+      if (edges_[size_t(i)].first == key) return edges_[size_t(i)].second;
+    return -1;
   }
 
   // One pass: every pair of pieces sharing edges, the longest common
@@ -230,14 +249,22 @@ class Joiner {
       int a, b;
       double shared;
     };
+    if (!open_ready_) {  // the first pass: the edges between faces of one group
+      for (size_t i = 0; i < edges_.size(); ++i)
+        if (twin_[i] >= 0 && Find(twin_[i]) == Find(edges_[i].second)) open_.push_back(int(i));
+      open_ready_ = true;
+    }
     std::vector<Pair> pairs;
-    for (const auto& [key, f] : edges_) {
+    size_t kept = 0;  // an edge inside one piece stays inside: dropped, in order
+    for (const int i : open_) {
+      const auto& [key, f] = edges_[size_t(i)];
+      const int pf = piece_of_[f], pg = piece_of_[twin_[size_t(i)]];
+      if (pf == pg) continue;
+      open_[kept++] = i;
       const int a = int(key >> 32), b = int(uint32_t(key));
-      const int g = FaceWith(b, a);
-      if (g < 0 || Find(g) != Find(f)) continue;
-      const int pf = piece_of_[f], pg = piece_of_[g];
       if (pf < pg) pairs.push_back({pf, pg, glm::length(verts_[b] - verts_[a])});
     }
+    open_.resize(kept);
     std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
       return x.a != y.a ? x.a < y.a : x.b < y.b;
     });
@@ -263,7 +290,8 @@ class Joiner {
       }
       any = true;
     }
-    for (Piece& p : pieces_) p.pass_version = p.version;
+    for (const int i : joined_) pieces_[size_t(i)].pass_version = pieces_[size_t(i)].version;
+    joined_.clear();
     return any;
   }
 
@@ -317,6 +345,7 @@ class Joiner {
     p.lo = lo;
     p.hi = hi;
     ++p.version;
+    joined_.push_back(ia);
     q.alive = false;
     q.loop.clear();
     q.faces.clear();
@@ -370,6 +399,11 @@ class Joiner {
   std::vector<int> piece_of_;   // face -> the piece it is in
   std::vector<int> group_;      // union-find parent of each face (Group)
   std::vector<std::pair<uint64_t, int>> edges_;  // directed edge -> face, sorted
+  std::vector<int> from_;  // per vertex: its first edge in edges_; one more at the end
+  std::vector<int> twin_;  // per edge: the face with its reverse (FaceWith), or -1
+  std::vector<int> open_;  // edges (edges_ order) between two pieces of one group (Pass)
+  bool open_ready_ = false;
+  std::vector<int> joined_;  // pieces joined into this pass (their versions moved)
   std::unordered_set<std::array<int, 4>, KeyHash> failed_;  // pairs tried as they are
 };
 

@@ -20,6 +20,7 @@
 #include "hemicube.h"
 #include "memory.h"
 #include "mesh.h"
+#include "surface.h"
 #include "protocol.h"
 
 namespace {
@@ -231,15 +232,19 @@ int Worker::Run(std::string* err) {
   // Decoded: the frame (25-50 bytes an element) is let go before the mesh
   // is built beside the scene, the worker's peak.
   std::string().swap(payload);
-  if (!FitsInMemory(EstimateMesh(setup.scene, setup.mesh).elements, kWorkerBytesPerElement,
-                    UsableMemory(), &why) ||
-      !BuildMesh(setup.scene, setup.mesh, &mesh_, &why, [&setup] {
-        // The vertices (some 50 bytes an element, in as many blocks as
-        // faces) go back to the system before the elements are made.
-        DropVertices(&setup.scene);
-        malloc_trim(0);
-      }))
-    return Fail(why, err);
+  {
+    // Joined once for the estimate and the mesh, and let go once meshed.
+    const std::vector<Surface> surfaces = BuildSurfaces(setup.scene, setup.mesh.join);
+    if (!FitsInMemory(EstimateMesh(setup.scene, surfaces, setup.mesh).elements,
+                      kWorkerBytesPerElement, UsableMemory(), &why) ||
+        !BuildMesh(setup.scene, surfaces, setup.mesh, &mesh_, &why, [&setup] {
+          // The vertices (some 50 bytes an element, in as many blocks as
+          // faces) go back to the system before the elements are made.
+          DropVertices(&setup.scene);
+          malloc_trim(0);
+        }))
+      return Fail(why, err);
+  }
   // Only the mesh is needed from here on: the scene (100-200 bytes a face)
   // is let go rather than kept for the whole run.
   setup.scene = Scene();

@@ -12,7 +12,9 @@
 # varints, normal, area and its own vertices), marked "(v3)".
 #   bash bench/startup.sh [N...]            (default 2000 20000; J: JOBS)
 #   JOBS="2 4 8" BEFORE=/tmp/before2/radiosity bash bench/startup.sh 20000
-# OPTS adds options to every run (e.g. OPTS=--no-groups).
+# OPTS adds options to every run (e.g. OPTS=--no-groups). Then, when
+# build/radiosity-startup is built, the master's start-up part by part in
+# CPU seconds (load, join, estimate, mesh, groups) for each N.
 cd "$(dirname "$0")/.." || exit 1
 RAD=${RADIOSITY:-$PWD/radiosity}
 GEN=${SCENEGEN:-$PWD/build/scenegen}
@@ -66,4 +68,12 @@ for n in "$@"; do
       rm -rf "$T/o"
     done
   done
+done
+PARTS=${STARTUP:-$PWD/build/radiosity-startup}
+[ -x "$PARTS" ] || exit 0
+printf '\n| scene | load s | join s | estimate s | mesh s | groups s | meshed s | faces | surfaces | elements | groups | hash |\n'
+printf '|---|---|---|---|---|---|---|---|---|---|---|---|\n'
+for n in "$@"; do
+  "$GEN" boxes "$n" "$T/boxes$n.obj" >/dev/null 2>&1 || exit 1
+  "$PARTS" "$T/boxes$n.obj" | sed "s|$T/||"
 done
