@@ -98,14 +98,29 @@ wait_run() {
 }
 _done_or_ended() { "$@" || ! kill -0 "$PID" 2>/dev/null; }
 
-# no_workers: no worker process of $RADIOSITY is running.
-no_workers() { ! pgrep -f -- "$RADIOSITY --worker" >/dev/null; }
+# Every process this test starts inherits RADIOSITY_TEST=$T (the
+# program's local workers too), so that the tests below see this test's
+# workers only, not those of a test running beside it (tests/run.sh).
+RADIOSITY_TEST=$T
+export RADIOSITY_TEST
 
-# no_workers_left WHAT: a check that no worker process of $RADIOSITY is
+# my_workers: the pids of the worker processes of $RADIOSITY that this
+# test started (their master may be gone).
+my_workers() {
+  local p
+  for p in $(pgrep -f -- "$RADIOSITY --worker"); do
+    tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qxF "RADIOSITY_TEST=$T" && echo "$p"
+  done
+}
+
+# no_workers: no worker process of this test is running.
+no_workers() { [ -z "$(my_workers)" ]; }
+
+# no_workers_left WHAT: a check that no worker process of this test is
 # left running (given 5 s to notice that their master is gone).
 no_workers_left() {
   if wait_until 5 no_workers; then pass "$1"
-  else fail "$1 (worker processes left behind: $(pgrep -f -- "$RADIOSITY --worker" | tr '\n' ' '))"; fi
+  else fail "$1 (worker processes left behind: $(my_workers | tr '\n' ' '))"; fi
 }
 
 # says NAME TEXT: stderr of run NAME has TEXT (a grep pattern).

@@ -11,7 +11,8 @@
 #    columns keep it shooting while it is stopped); with --timeout 1 the
 #    stopped worker is dropped and its patches are computed elsewhere;
 #  * a worker of another protocol version, and one that sends garbage, are
-#    refused with a message naming them, and the master goes on.
+#    refused with a message naming them, and the master goes on (to the
+#    furnace's answer).
 #   RADIOSITY=/abs/path/radiosity bash tests/parallel.sh
 # shellcheck source=tests/lib.sh
 . "$(dirname "$0")/lib.sh"
@@ -191,10 +192,13 @@ else
 fi
 EOF
 chmod +x "$T/mixed.sh"
-run_rad "$T/mixed" -j 2 --worker-cmd "$T/mixed.sh" "${ARGS[@]}" "$MAZE"
+# The garbage comes before the first shot, so the run need not be long:
+# the furnace above, whose answer is known (a maze run to -e 1e-5 with the
+# one real worker left took 50 s to 120 s).
+run_rad "$T/mixed" -j 2 --worker-cmd "$T/mixed.sh" -e 1e-4 -r 64 "$T/f.obj"
 if [ "$RC" -eq 0 ] && grep -q "sent a bad frame" "$T/mixed.err"; then
   pass "a worker sending garbage is dropped, the run goes on ($(grep -m1 'bad frame' "$T/mixed.err"))"
-  check_same "garbage worker: answer" "$T/mixed/result.csv" "$T/seq/result.csv" 0.5
+  check_rel "garbage worker: furnace B" "$(csv_wmean "$T/mixed/result.csv" B_g 0 1 2 3 4 5)" 10 0.5
 else
   fail "a worker sending garbage (exit $RC; stderr: $(head -3 "$T/mixed.err"))"
 fi

@@ -6,10 +6,20 @@
 # targets for a few seconds each (fuzz/run.sh). A shell test
 # passes with exit 0, is skipped with 77 and fails otherwise. Ends with
 # "N passed, N failed, N skipped".
+#
+# The tests are independent of each other, so they run side by side, as
+# many at a time as there are cores (TEST_JOBS to change it): many of them
+# wait on processes, timeouts and a browser more than they compute, and
+# with no more than that the ones that compute are not slowed past their
+# bounds (view.sh's run must end within 120 s of its page being looked at).
+# Each one's output is kept in a file of its own and printed whole when it
+# ends, in the order they end.
 cd "$(dirname "$0")/.." || exit 1
 passed=0 failed=0 skipped=0
-log=$(mktemp)
-trap 'rm -f "$log" "$log".*' EXIT
+log=$(mktemp -d) || exit 1
+trap 'rm -rf "$log"' EXIT
+ncpu=$(nproc 2>/dev/null || echo 1)
+slots=${TEST_JOBS:-$ncpu}
 
 # The sanitizer pass runs the end-to-end tests that reach the most code
 # per second (the loader's error paths, the command line and its local
@@ -31,46 +41,101 @@ SAN_SKIP="$SAN_SKIP:Solver.OvershootingDoesNotChangeTheAnswer:Subdivider.SmoothL
 SAN_SKIP="$SAN_SKIP:Sim.ACrashedWorkerLosesNothing:Scheduler.LostWorkerLosesNothing"
 SAN_SKIP="$SAN_SKIP:Solver.SelectIsTheFullScanOnTheShippedScenes"
 
-# unit LABEL BINARY [GTEST FLAGS...]
-# The tests run in gtest's shards, one per core, side by side: they are
-# independent of each other, and one process would leave a core idle.
-unit() {
-  echo "== unit tests ($1)"
-  label=$1 bin=$2; shift 2
-  n=$(nproc 2>/dev/null || echo 1) i=0 pids=
-  while [ "$i" -lt "$n" ]; do
-    GTEST_TOTAL_SHARDS=$n GTEST_SHARD_INDEX=$i "$bin" --gtest_brief=1 "$@" >"$log.$i" 2>&1 &
-    pids="$pids $!" i=$((i + 1))
-  done
-  wait $pids
-  i=0
-  while [ "$i" -lt "$n" ]; do
-    cat "$log.$i"
-    p=$(sed -n 's/^\[  PASSED  \] \([0-9]*\) test.*/\1/p' "$log.$i")
-    f=$(sed -n 's/^\[  FAILED  \] \([0-9]*\) test.*/\1/p' "$log.$i")
-    [ -n "$p" ] || { p=0; f=${f:-1}; echo "FAIL: unit tests ($label, shard $i) did not finish"; }
-    passed=$((passed + p)) failed=$((failed + ${f:-0})) i=$((i + 1))
-  done
+# --- the jobs; each prints its report and writes "PASSED FAILED SKIPPED"
+# to the file $res.
+
+# unit_shard LABEL BINARY INDEX TOTAL [GTEST FLAGS...]: one gtest shard.
+unit_shard() {
+  label=$1 bin=$2 i=$3 n=$4; shift 4
+  echo "== unit tests ($label, shard $((i + 1)) of $n)"
+  GTEST_TOTAL_SHARDS=$n GTEST_SHARD_INDEX=$i "$bin" --gtest_brief=1 "$@" >"$res.out" 2>&1
+  cat "$res.out"
+  p=$(sed -n 's/^\[  PASSED  \] \([0-9]*\) test.*/\1/p' "$res.out")
+  f=$(sed -n 's/^\[  FAILED  \] \([0-9]*\) test.*/\1/p' "$res.out")
+  [ -n "$p" ] || { p=0; f=${f:-1}; echo "FAIL: unit tests ($label, shard $((i + 1))) did not finish"; }
+  echo "$p ${f:-0} 0" >"$res"
 }
 
-# shell LABEL TESTS...: with $RADIOSITY set
-shell() {
-  label=$1; shift
-  for t in "$@"; do
-    echo "== $t ($label)"
-    start=$(date +%s)
-    bash "$t" >"$log" 2>&1
-    rc=$?
-    cat "$log"
-    if [ "$label" = asan ] && grep -q 'ERROR: AddressSanitizer\|ERROR: LeakSanitizer\|runtime error:' "$log"; then
-      echo "FAIL: a sanitizer report in $t"; rc=1
+# shell_test LABEL TEST: with $RADIOSITY set.
+shell_test() {
+  label=$1 t=$2
+  echo "== $t ($label)"
+  start=$(date +%s)
+  bash "$t" >"$res.out" 2>&1
+  rc=$?
+  cat "$res.out"
+  if [ "$label" = asan ] && grep -q 'ERROR: AddressSanitizer\|ERROR: LeakSanitizer\|runtime error:' "$res.out"; then
+    echo "FAIL: a sanitizer report in $t"; rc=1
+  fi
+  secs=$(( $(date +%s) - start ))
+  case $rc in
+    0) echo "1 0 0" >"$res"; echo "-- passed: $t ($label, ${secs} s)" ;;
+    77) echo "0 0 1" >"$res"; echo "-- skipped: $t ($label)" ;;
+    *) echo "0 1 0" >"$res"; echo "-- FAILED: $t ($label, exit $rc)" ;;
+  esac
+}
+
+man_lint() {
+  echo "== man page lint"
+  if out=$(groff -man -ww -z man/radiosity.1 2>&1) && [ -z "$out" ]; then
+    echo "1 0 0" >"$res"
+  else
+    echo "0 1 0" >"$res"; echo "FAIL: groff -man -ww -z man/radiosity.1"; echo "$out"
+  fi
+}
+
+# Each fuzz target (fuzz/) for a few seconds on its seeds, and the inputs
+# that once crashed one (fuzz/regressions/) replayed. `make fuzz` runs
+# them longer.
+fuzz_check() {
+  echo "== fuzz (${FUZZ_CHECK_SECONDS:-3} s per target)"
+  if why=$(sh fuzz/probe.sh); then
+    if sh fuzz/run.sh "${FUZZ_CHECK_SECONDS:-3}"; then
+      echo "1 0 0" >"$res"; echo "-- passed: fuzz"
+    else
+      echo "0 1 0" >"$res"; echo "-- FAILED: fuzz"
     fi
-    secs=$(( $(date +%s) - start ))
-    case $rc in
-      0) passed=$((passed + 1)); echo "-- passed: $t ($label, ${secs} s)" ;;
-      77) skipped=$((skipped + 1)); echo "-- skipped: $t ($label)" ;;
-      *) failed=$((failed + 1)); echo "-- FAILED: $t ($label, exit $rc)" ;;
-    esac
+  else
+    echo "0 0 1" >"$res"; echo "-- skipped: fuzz ($why)"
+  fi
+}
+
+# --- the pool: job CMD... starts CMD (a function above) once fewer than
+# $slots jobs run; reap prints the jobs that have ended.
+started=0 running=""
+job() {
+  while [ "$(echo $running | wc -w)" -ge "$slots" ]; do
+    reap || sleep 0.2
+  done
+  started=$((started + 1))
+  res=$log/$started
+  ( "$@" >"$res.log" 2>&1; echo done >"$res.end" ) &
+  running="$running $started"
+}
+# reap: prints every job that has ended; false when none had.
+reap() {
+  still="" any=1
+  for j in $running; do
+    if [ -e "$log/$j.end" ]; then
+      cat "$log/$j.log"
+      read -r p f s <"$log/$j" 2>/dev/null || { p=0 f=1 s=0; echo "FAIL: job $j left no result"; }
+      passed=$((passed + p)) failed=$((failed + f)) skipped=$((skipped + s)) any=0
+    else
+      still="$still $j"
+    fi
+  done
+  running=$still
+  return $any
+}
+
+# unit LABEL BINARY [GTEST FLAGS...]: the unit tests in two shards per
+# core, so that the pool has small pieces to fill its slots with.
+unit() {
+  label=$1 bin=$2; shift 2
+  n=$((2 * ncpu)) i=0
+  while [ "$i" -lt "$n" ]; do
+    job unit_shard "$label" "$bin" "$i" "$n" "$@"
+    i=$((i + 1))
   done
 }
 
@@ -80,45 +145,45 @@ for t in tests/*.sh; do
   all_shell="$all_shell $t"
 done
 
-RADIOSITY="$(pwd)/radiosity"
-export RADIOSITY
-unit build ./build/unit_tests
-# shellcheck disable=SC2086 # a list of paths without spaces
-shell build $all_shell
+# The longest jobs start first, so that none starts last and runs alone:
+# the unit tests, then these (only an order: every tests/*.sh runs, listed
+# here or not).
+LONG_TESTS="tests/parallel.sh tests/view.sh tests/furnace.sh tests/ssh.sh tests/stiff.sh"
+first="" rest=""
+for t in $all_shell; do
+  case " $LONG_TESTS " in *" $t "*) first="$first $t" ;; *) rest="$rest $t" ;; esac
+done
 
-echo "== man page lint"
-if out=$(groff -man -ww -z man/radiosity.1 2>&1) && [ -z "$out" ]; then
-  passed=$((passed + 1))
-else
-  failed=$((failed + 1)); echo "FAIL: groff -man -ww -z man/radiosity.1"; echo "$out"
-fi
-
-# Each fuzz target (fuzz/) for a few seconds on its seeds, and the inputs
-# that once crashed one (fuzz/regressions/) replayed. `make fuzz` runs
-# them longer.
-echo "== fuzz (${FUZZ_CHECK_SECONDS:-3} s per target)"
-if why=$(sh fuzz/probe.sh); then
-  if sh fuzz/run.sh "${FUZZ_CHECK_SECONDS:-3}"; then
-    passed=$((passed + 1)); echo "-- passed: fuzz"
-  else
-    failed=$((failed + 1)); echo "-- FAILED: fuzz"
-  fi
-else
-  skipped=$((skipped + 1)); echo "-- skipped: fuzz ($why)"
-fi
-
-if [ -x build/asan/radiosity ] && [ -x build/asan/unit_tests ]; then
+build_env() {
+  RADIOSITY="$(pwd)/radiosity"
+  ASAN_OPTIONS="" UBSAN_OPTIONS=""
+}
+asan_env() {
   RADIOSITY="$(pwd)/build/asan/radiosity"
   # Leaks are reported too; abort on the first report of any kind.
   ASAN_OPTIONS=abort_on_error=1:detect_leaks=1
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-  export RADIOSITY ASAN_OPTIONS UBSAN_OPTIONS
+}
+export RADIOSITY ASAN_OPTIONS UBSAN_OPTIONS
+san=no
+[ -x build/asan/radiosity ] && [ -x build/asan/unit_tests ] && san=yes
+
+build_env
+unit build ./build/unit_tests
+for t in $first; do job shell_test build "$t"; done
+if [ $san = yes ]; then
+  asan_env
   unit asan ./build/asan/unit_tests --gtest_filter="-$SAN_SKIP"
-  # shellcheck disable=SC2086
-  shell asan $SAN_TESTS
+  for t in $SAN_TESTS; do job shell_test asan "$t"; done
 else
   skipped=$((skipped + 1)); echo "-- skipped: the sanitizer pass (no build/asan; run make asan)"
 fi
+build_env
+for t in $rest; do job shell_test build "$t"; done
+job fuzz_check
+job man_lint
+
+while [ -n "$running" ]; do reap || sleep 0.2; done
 
 echo "$passed passed, $failed failed, $skipped skipped"
 [ "$failed" -eq 0 ]
