@@ -30,10 +30,10 @@ float Up(double x) {
   return double(f) < x ? std::nextafter(f, HUGE_VALF) : f;
 }
 
-double LongestEdge(const Mesh& m, const Element& e) {
+double ShortestEdge(const Mesh& m, const Element& e) {
   const int n = e.IsTriangle() ? 3 : 4;
-  double l = 0;
-  for (int k = 0; k < n; ++k) l = std::max(l, glm::length(m.verts[e.v[(k + 1) % n]] - m.verts[e.v[k]]));
+  double l = HUGE_VAL;
+  for (int k = 0; k < n; ++k) l = std::min(l, glm::length(m.verts[e.v[(k + 1) % n]] - m.verts[e.v[k]]));
   return l;
 }
 
@@ -75,7 +75,7 @@ void Subdivider::Track(const Mesh& mesh) {
     const Element& el = mesh.elems[e];
     const glm::dvec3& ke = mesh.FaceOf(int(e)).emission;
     eligible_[e] = el.IsLeaf() ? kLeaf : 0;
-    if (el.IsLeaf() && el.level < opts_.max_level && LongestEdge(mesh, el) / 2 >= opts_.min_size)
+    if (el.IsLeaf() && el.level < opts_.max_level && ShortestEdge(mesh, el) / 2 >= opts_.min_size)
       eligible_[e] |= kEligible;
     mean_area_[e] = el.IsLeaf() && !(ke.r + ke.g + ke.b > 0) ? el.area : -1;
     if (el.parent >= 0 && size_t(el.parent) < from) {

@@ -72,7 +72,7 @@ struct SubdivideOptions {
   double threshold = 0.5;  // the dividing factor a leaf must exceed, at first
   double floor = 0.2;      // ... lowered by `decay` every pass down to this
   double decay = 0.7;
-  double min_size = 0;     // no child's longest edge shorter; 0: scene diagonal / 400
+  double min_size = 0;     // no child's edge shorter; 0: scene diagonal / 400
   int max_level = 2;       // deepest level below the elements BuildMesh made
   bool waves = true;       // restart on the finer mesh after wave_fraction
   double wave_fraction = 0.2;  // of the wave's starting elements divided
