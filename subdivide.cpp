@@ -13,10 +13,27 @@ double Lum(const glm::dvec3& x) { return (x.r + x.g + x.b) / 3; }
 // (subdivide.h).
 constexpr double kNoiseSigmas = 3.5;
 
-double LongestEdge(const Mesh& m, const Element& e) {
+// How far (relative) a leaf's luminance may move from where it was synced
+// before it counts as moved (Pass): 1/16 leaves a factor bound of about
+// 0.13 on an evenly lit face, under the floor threshold 0.2, and a leaf
+// that gains light steadily moves about once per 6% gained (1/32 and 1/8
+// evaluated about as many leaves on boxes1000, by neighbours of the moved
+// and by looser bounds respectively).
+constexpr double kDrift = 1.0 / 16;
+
+// Subdivider::eligible_'s bits.
+constexpr uint8_t kLeaf = 1, kEligible = 2;
+
+// x rounded up to a float.
+float Up(double x) {
+  float f = float(x);
+  return double(f) < x ? std::nextafter(f, HUGE_VALF) : f;
+}
+
+double ShortestEdge(const Mesh& m, const Element& e) {
   const int n = e.IsTriangle() ? 3 : 4;
-  double l = 0;
-  for (int k = 0; k < n; ++k) l = std::max(l, glm::length(m.verts[e.v[(k + 1) % n]] - m.verts[e.v[k]]));
+  double l = HUGE_VAL;
+  for (int k = 0; k < n; ++k) l = std::min(l, glm::length(m.verts[e.v[(k + 1) % n]] - m.verts[e.v[k]]));
   return l;
 }
 
@@ -50,14 +67,16 @@ void Subdivider::Track(const Mesh& mesh) {
   const size_t from = eligible_.size(), n = mesh.elems.size();
   eligible_.resize(n);
   mean_area_.resize(n);
-  factor_.resize(n, 0);
+  synced_.resize(n, NAN);
+  bound_.resize(n, 0);
   at_pass_.resize(n, -1);
   mark_.resize(n, 0);
   for (size_t e = from; e < n; ++e) {
     const Element& el = mesh.elems[e];
     const glm::dvec3& ke = mesh.FaceOf(int(e)).emission;
-    eligible_[e] = el.IsLeaf() && el.level < opts_.max_level &&
-                   LongestEdge(mesh, el) / 2 >= opts_.min_size;
+    eligible_[e] = el.IsLeaf() ? kLeaf : 0;
+    if (el.IsLeaf() && el.level < opts_.max_level && ShortestEdge(mesh, el) / 2 >= opts_.min_size)
+      eligible_[e] |= kEligible;
     mean_area_[e] = el.IsLeaf() && !(ke.r + ke.g + ke.b > 0) ? el.area : -1;
     if (el.parent >= 0 && size_t(el.parent) < from) {
       eligible_[size_t(el.parent)] = 0;
@@ -84,33 +103,44 @@ double Subdivider::PassBound(int k, const glm::dvec3& ambient, double mean) cons
   return r;
 }
 
-// The dividing factor of leaf e (subdivide.h). *bounded: false when a
-// term had s < 0 or no positive scale, where PassBound does not hold.
+// The dividing factor of leaf e (subdivide.h), and in *bound the largest
+// it can be with every luminance within its synced value's tolerance
+// (synced_, kDrift) and this scale's shared part; +inf where PassBound
+// does not hold (a term's s < 0, or no positive scale).
 double Subdivider::Factor(const Mesh& mesh, const std::vector<glm::dvec3>& b,
                           const std::vector<double>& noise, const glm::dvec3& ambient,
-                          double mean, int e, bool* bounded) {
+                          double mean, int e, double* bound) {
   std::vector<int>& nb = nb_;
   const Element& el = mesh.elems[size_t(e)];
   LeafNeighbours(mesh, e, &nb);
   const double unsure = Lum(mesh.FaceOf(e).rho * ambient) + 0.2 * mean;
   const glm::dvec3 c = mesh.Centroid(e);
   const double size = std::sqrt(el.area), be = Lum(b[size_t(e)]);
-  double factor = 0;
-  *bounded = true;
+  const double se = synced_[size_t(e)], te = kDrift * std::abs(se);
+  double factor = 0, most = 0;
   for (int m : nb) {
     const double dist = glm::length(mesh.Centroid(m) - c);
     const double bm = Lum(b[size_t(m)]);
     const double scale = std::max(be, bm) + unsure;
     if (!(dist > 0)) continue;
-    if (!(scale > 0) || !(std::max(be, bm) >= 0)) *bounded = false;
+    const double sm = synced_[size_t(m)], tm = kDrift * std::abs(sm);
+    // The least max(B_e, B_n) and the largest difference within tolerance.
+    const double low = std::max(se - te, sm - tm), wide = std::abs(se - sm) + te + tm;
+    // (B itself out of tolerance: a luminance a float cannot keep.)
+    if (!(low >= 0) || !(low + unsure > 0) || !(std::abs(be - se) <= te) || !(std::abs(bm - sm) <= tm))
+      most = HUGE_VAL;
     if (!(scale > 0)) continue;
     const double finer = 1 + 0.5 * std::max(0, mesh.elems[size_t(m)].level - el.level);
     // A difference the hemicube's pixels could have made is no light's.
+    const double gate = noise.empty() ? -1 : kNoiseSigmas * std::sqrt(noise[size_t(e)] + noise[size_t(m)]);
     const double diff = std::abs(be - bm);
-    const double light =
-        noise.empty() || diff > kNoiseSigmas * std::sqrt(noise[size_t(e)] + noise[size_t(m)]) ? diff : 0;
+    const double light = diff > gate ? diff : 0;
     factor = std::max(factor, light / dist * size / scale * finer);
+    // The gate only rises (V adds up): one the widest difference cannot
+    // pass now, it never will.
+    if (wide > gate && most < HUGE_VAL) most = std::max(most, wide / dist * size / (low + unsure) * finer);
   }
+  *bound = most;
   return factor;
 }
 
@@ -123,8 +153,25 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::d
   const size_t n = mesh.elems.size();
   CHECK(b.size() == n && (noise.empty() || noise.size() == n));
   Track(mesh);
+  // The leaves whose luminance left its synced value's tolerance (new
+  // ones: NaN), synced again: found from the changed list when it is short,
+  // else in the scan of every leaf that sums the lit scene's mean (a scan
+  // in order is cheaper than a long list in the order shots touched them).
+  const int pass = int(pass_mean_.size());
+  const bool scan = !opts_.incremental || pass == 0 || 8 * changed.size() > n;
+  std::vector<int32_t> moved;
+  auto sync = [&](size_t e) {
+    const double l = Lum(b[e]), s = synced_[e];
+    if (std::abs(l - s) <= kDrift * std::abs(s)) return;
+    synced_[e] = float(l);
+    moved.push_back(int32_t(e));
+  };
+  if (!scan)
+    for (int32_t e : changed)
+      if (size_t(e) < n && eligible_[size_t(e)] & kLeaf) sync(size_t(e));  // not divided since
   double sum = 0, area = 0;  // the lit scene's mean: the absolute part of the scale
   for (size_t e = 0; e < n; ++e) {
+    if (scan && eligible_[e] & kLeaf) sync(e);
     if (mean_area_[e] < 0) continue;
     sum += Lum(b[e]) * mean_area_[e];
     area += mean_area_[e];
@@ -132,24 +179,22 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::d
   const double mean = area > 0 ? sum / area : 0;
 
   // The leaves to evaluate, marked: every one at a wave's first pass (or
-  // without `incremental`); else those changed, their neighbours, the new,
+  // without `incremental`); else those moved, their neighbours, the new,
   // and those whose bound reaches the threshold. Evaluated in id order.
   std::vector<int32_t> todo;
   std::vector<int> nb;
-  const int pass = int(pass_mean_.size());
   auto want = [&](int32_t e) {
-    if (eligible_[size_t(e)] && !mark_[size_t(e)]) {
+    if (eligible_[size_t(e)] & kEligible && !mark_[size_t(e)]) {
       mark_[size_t(e)] = 1;
       todo.push_back(e);
     }
   };
-  // Changed leaves and their neighbours take two neighbour searches each:
-  // when a quarter of the leaves changed, evaluating all is cheaper.
-  if (!opts_.incremental || pass == 0 || 4 * long(changed.size()) > mesh.LeafCount()) {
+  // Moved leaves and their neighbours take two neighbour searches each:
+  // when a quarter of the leaves moved, evaluating all is cheaper.
+  if (!opts_.incremental || pass == 0 || 4 * long(moved.size()) > mesh.LeafCount()) {
     for (size_t e = 0; e < n; ++e) want(int32_t(e));
   } else {
-    for (int32_t e : changed) {
-      if (size_t(e) >= n || !mesh.elems[size_t(e)].IsLeaf()) continue;  // divided since
+    for (int32_t e : moved) {
       want(e);
       LeafNeighbours(mesh, e, &nb);
       for (int m : nb) want(m);
@@ -157,9 +202,9 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::d
     std::vector<double> grow(static_cast<size_t>(pass));
     for (int k = 0; k < pass; ++k) grow[size_t(k)] = PassBound(k, ambient, mean) * (1 + 1e-9);
     for (size_t e = 0; e < n; ++e) {
-      if (!eligible_[e] || mark_[e]) continue;
+      if (!(eligible_[e] & kEligible) || mark_[e]) continue;
       const int k = at_pass_[e];
-      if (k < 0 || !(factor_[e] * grow[size_t(k)] <= threshold_)) want(int32_t(e));
+      if (k < 0 || !(double(bound_[e]) * grow[size_t(k)] <= threshold_)) want(int32_t(e));
     }
     std::sort(todo.begin(), todo.end());
   }
@@ -169,9 +214,9 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::d
 
   std::vector<int32_t> out;
   for (int32_t e : todo) {
-    bool bounded;
-    const double factor = Factor(mesh, b, noise, ambient, mean, e, &bounded);
-    factor_[size_t(e)] = bounded ? factor : HUGE_VAL;
+    double bound;
+    const double factor = Factor(mesh, b, noise, ambient, mean, e, &bound);
+    bound_[size_t(e)] = Up(bound);
     at_pass_[size_t(e)] = pass;
     if (factor > threshold_) out.push_back(e);
     else mark_[size_t(e)] = 0;  // marks left: the chosen, for grading
@@ -244,6 +289,7 @@ SubdividerState Subdivider::State() const {
 void Subdivider::Restore(const SubdividerState& s) {
   // The mesh was divided since: every cache again, every leaf evaluated.
   eligible_.clear();
+  synced_.clear();
   pass_ambient_.clear();
   pass_mean_.clear();
   measured_ = false;

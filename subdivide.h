@@ -87,7 +87,7 @@ struct SubdivideOptions {
   double threshold = 0.5;  // the dividing factor a leaf must exceed, at first
   double floor = 0.2;      // ... lowered by `decay` every pass down to this
   double decay = 0.7;
-  double min_size = 0;     // no child's longest edge shorter; 0: scene diagonal / 400
+  double min_size = 0;     // no child's edge shorter; 0: scene diagonal / 400
   int max_level = 2;       // deepest level below the elements BuildMesh made
   bool waves = true;       // restart on the finer mesh after wave_fraction
   double wave_fraction = 0.2;  // of the wave's starting elements divided
@@ -137,15 +137,22 @@ class Subdivider {
   // threshold.
   //
   // The divisions are those of evaluating every leaf, but a pass evaluates
-  // (neighbour search, factor) only the leaves that changed, their
-  // neighbours, new leaves, and those whose last factor could have grown
-  // past the threshold since: with the same radiosity, a factor changes
-  // only through the scale's shared part Kd·ambient + 0.2·mean, and by at
-  // most the ratio of the old shared terms to the new (PassBound). A scan
-  // of two numbers per leaf finds those; the mean of the lit scene is
-  // still summed over every leaf (8 bytes each, in order: the same sum).
-  // A changed leaf costs two neighbour searches (itself, its neighbours):
-  // when over a quarter changed, the pass evaluates every leaf instead.
+  // (neighbour search, factor) only the leaves whose factor may have
+  // passed the threshold. Each leaf keeps its luminance as of when it was
+  // last synced, s, and counts as moved only when its B has left
+  // s ± kDrift·|s| (new leaves always): a pass evaluates the moved
+  // leaves, their neighbours, new leaves, and those whose bound could
+  // have grown past the threshold since. The bound is the largest factor
+  // any B within those tolerances gives (noise gate included: V only
+  // grows), so it holds until a neighbour moves; with the same
+  // tolerances, the factor changes only through the scale's shared part
+  // Kd·ambient + 0.2·mean, by at most the ratio of the old shared terms
+  // to the new (PassBound). A scan of three numbers per leaf (12 bytes:
+  // s and the bound as floats, the pass) finds those; the mean of the lit
+  // scene is still summed over every leaf (8 bytes each, in order: the
+  // same sum). A moved leaf costs two neighbour searches (itself, its
+  // neighbours): when over a quarter moved, the pass evaluates every leaf
+  // instead.
   std::vector<int32_t> Pass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
                             const std::vector<double>& noise, const glm::dvec3& ambient,
                             long shots, const std::vector<int32_t>& changed);
@@ -196,7 +203,7 @@ class Subdivider {
  private:
   double Factor(const Mesh& mesh, const std::vector<glm::dvec3>& b,
                 const std::vector<double>& noise, const glm::dvec3& ambient, double mean, int e,
-                bool* bounded);
+                double* bound);
   void Track(const Mesh& mesh);
   double PassBound(int pass, const glm::dvec3& ambient, double mean) const;
   void FindNear(const Mesh& mesh, size_t from);
@@ -205,11 +212,13 @@ class Subdivider {
   SubdivideOptions opts_;
   // Per element, grown as the mesh is: may it be divided (a leaf above
   // max_level, long enough); its area if the lit mean counts it, else -1;
-  // the factor as last computed and the pass of this wave that did (-1:
-  // none; factor +inf: to be computed every pass, no bound holds).
+  // its luminance when last synced (NaN: never); the bound on its factor
+  // as last computed, rounded up, and the pass of this wave that did (-1:
+  // none; bound +inf: to be computed every pass, no bound holds).
   std::vector<uint8_t> eligible_;
   std::vector<double> mean_area_;
-  std::vector<double> factor_;
+  std::vector<float> synced_;
+  std::vector<float> bound_;
   std::vector<int32_t> at_pass_;
   std::vector<uint8_t> mark_;            // Pass's scratch, all 0 between passes
   std::vector<int> nb_;                  // Factor's scratch

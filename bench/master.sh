@@ -7,8 +7,9 @@
 #  2. the master's work per shot on recorded columns (build/radiosity-master:
 #     select, decode, shoot) against the target 10 us + 5 ns per covered
 #     element
-#  3. division pass time per size, evaluating the leaves that may divide
-#     against evaluating every leaf (radiosity-master --divide)
+#  3. division pass time per size (10^3 to 10^6 elements: DIVIDE_SCENES,
+#     DIVIDE_SHOTS shots, default 300), evaluating the leaves that may
+#     divide against evaluating every leaf (radiosity-master --divide)
 #  4. the cluster simulation (build/radiosity-cluster) on a room of 3,800
 #     boxes (~10^5 elements) at 8, 32, 64 and 128 workers on 1 and
 #     10 Gbit/s, beside CLUSTER_BEFORE (the same tool built on the program
@@ -33,6 +34,9 @@ gen boxes1k 1000
 gen boxes3800 3800
 gen boxes10k 10000
 [ -n "$SCENES" ] || SCENES="scenes/room.obj:1000 $S/boxes1k.obj:300 $S/boxes3800.obj:200 $S/boxes10k.obj:100"
+# Division passes at about 10^3, 10^4, 10^5 and 10^6 elements.
+[ -n "$DIVIDE_SCENES" ] || { gen boxes40k 40000; DIVIDE_SCENES="scenes/cornell.obj $S/boxes1k.obj $S/boxes10k.obj $S/boxes40k.obj"; }
+DIVIDE_SHOTS=${DIVIDE_SHOTS:-300}
 if [ "${BIG:-0}" = 1 ]; then
   gen boxes100k 100000
   SCENES="$SCENES $S/boxes100k.obj:20"
@@ -89,20 +93,19 @@ for sn in $SCENES; do
 done
 
 echo
-echo "Division passes (radiosity-master --divide: a pass every 10 shots after the first"
-echo "20, no waves): the share of the leaves a pass evaluated, and CPU ms per pass for the"
-echo "policy alone and with Divide and Solver::Divided, evaluating the leaves that may"
-echo "divide (now) and every leaf (before); the same divisions either way"
+echo "Division passes per size (radiosity-master --divide, R 256: a pass every 10 shots"
+echo "after the first 20 to 50, no waves, $DIVIDE_SHOTS shots): the share of the leaves a"
+echo "pass evaluated, and CPU ms per pass for the policy alone and with Divide and"
+echo "Solver::Divided, evaluating the leaves that may divide (now) and every leaf"
+echo "(before issue 14); the same divisions either way"
 echo
-echo "| scene | patches | elements | passes | divided | evaluated | policy ms | pass ms | every leaf: evaluated | policy ms | pass ms |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|"
-for sn in $SCENES; do
-  scene=${sn%:*} n=${sn#*:}
-  [ "$n" -gt 100 ] && n=100
-  now=$(./build/radiosity-master "$scene" "$n" 256 --divide)
-  all=$(./build/radiosity-master "$scene" "$n" 256 --divide --every-leaf)
+echo "| scene | patches | elements | passes | divided | evaluated | policy ms | pass ms | every leaf: evaluated | policy ms | pass ms | policy every leaf/now |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+for scene in $DIVIDE_SCENES; do
+  now=$(./build/radiosity-master "$scene" "$DIVIDE_SHOTS" 256 --divide)
+  all=$(./build/radiosity-master "$scene" "$DIVIDE_SHOTS" 256 --divide --every-leaf)
   echo "$now|$all" | awk -F'|' -v s="$(basename "$scene" .obj)" \
-    '{ printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", s, $4, $5, $14, $15, $16, $17, $18, $36, $37, $38 }'
+    '{ printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %.1f |\n", s, $4, $5, $14, $15, $16, $17, $18, $36, $37, $38, $37 / ($17 > 0 ? $17 : 1e-9) }'
 done
 
 echo

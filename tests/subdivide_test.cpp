@@ -429,6 +429,36 @@ TEST(Subdivider, StopsAtTheElementCap) {
   EXPECT_EQ(m.elems.size(), built);
 }
 
+// No division makes an edge shorter than min_size: a strip whose elements
+// are 0.05 x 0.125 across the shadow's edges is divided with min_size
+// 0.02, and not at all with 0.04 (half its long edge would pass, half its
+// short edge not), while the floor's 0.125 squares still are.
+TEST(Subdivider, ThinElementsAreNotDivided) {
+  Scene s = ShadowScene();
+  AddFace(&s, {{-1, 0.45, 0.5}, {2, 0.45, 0.5}, {2, 0.55, 0.5}, {-1, 0.55, 0.5}}, glm::dvec3(0.6),
+          glm::dvec3(0));  // faces up, under the blocker
+  const int strip = int(s.faces.size()) - 1;
+  MeshOptions o;
+  o.patch_size = 0.25;
+  for (double min_size : {0.02, 0.04}) {
+    Mesh m = MakeMesh(s, o);
+    auto leaves = [&m](int face) {
+      long n = 0;
+      for (const Element& el : m.elems) n += el.IsLeaf() && m.patches[el.patch].face == face;
+      return n;
+    };
+    const long strip0 = leaves(strip), floor0 = leaves(0);
+    Solver solver(m, true);
+    SubdivideOptions so;
+    so.min_size = min_size;
+    Subdivider sub(&m, so);
+    ASSERT_EQ(Adaptive(&m, &solver, &sub, 1e-3, kShadowRes).status, RunStatus::kConverged);
+    EXPECT_GT(leaves(0), floor0) << "min_size " << min_size;
+    if (min_size < 0.025) EXPECT_GT(leaves(strip), strip0);
+    else EXPECT_EQ(leaves(strip), strip0);
+  }
+}
+
 // Incremental passes divide exactly what evaluating every leaf divides:
 // the same mesh, bit for bit the same radiosity, through the waves of a
 // sharp shadow with overshooting on and off, evaluating fewer leaves.
