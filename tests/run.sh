@@ -101,31 +101,25 @@ fuzz_check() {
 }
 
 # --- the pool: job CMD... starts CMD (a function above) once fewer than
-# $slots jobs run; reap prints the jobs that have ended.
-started=0 running=""
+# $slots jobs run; reap waits for the next job to end and prints it. A
+# job says it has ended by writing its number to a pipe that the runner
+# holds open for reading and writing (so a write never blocks and a read
+# waits for the next line); its command runs without that descriptor.
+mkfifo "$log/ended" && exec 3<>"$log/ended" || exit 1
+started=0 running=0
 job() {
-  while [ "$(echo $running | wc -w)" -ge "$slots" ]; do
-    reap || sleep 0.2
-  done
+  while [ "$running" -ge "$slots" ]; do reap; done
   started=$((started + 1))
   res=$log/$started
-  ( "$@" >"$res.log" 2>&1; echo done >"$res.end" ) &
-  running="$running $started"
+  ( "$@" >"$res.log" 2>&1 3>&-; echo "$started" >&3 ) &
+  running=$((running + 1))
 }
-# reap: prints every job that has ended; false when none had.
 reap() {
-  still="" any=1
-  for j in $running; do
-    if [ -e "$log/$j.end" ]; then
-      cat "$log/$j.log"
-      read -r p f s <"$log/$j" 2>/dev/null || { p=0 f=1 s=0; echo "FAIL: job $j left no result"; }
-      passed=$((passed + p)) failed=$((failed + f)) skipped=$((skipped + s)) any=0
-    else
-      still="$still $j"
-    fi
-  done
-  running=$still
-  return $any
+  read -r j <&3
+  cat "$log/$j.log"
+  read -r p f s <"$log/$j" 2>/dev/null || { p=0 f=1 s=0; echo "FAIL: job $j left no result"; }
+  passed=$((passed + p)) failed=$((failed + f)) skipped=$((skipped + s))
+  running=$((running - 1))
 }
 
 # unit LABEL BINARY [GTEST FLAGS...]: the unit tests in two shards per
@@ -183,7 +177,7 @@ for t in $rest; do job shell_test build "$t"; done
 job fuzz_check
 job man_lint
 
-while [ -n "$running" ]; do reap || sleep 0.2; done
+while [ "$running" -gt 0 ]; do reap; done
 
 echo "$passed passed, $failed failed, $skipped skipped"
 [ "$failed" -eq 0 ]
