@@ -66,6 +66,13 @@ inline bool IsShooter(const Mesh& mesh, int p) {
   const PatchGroup* g = GroupOf(mesh, p);
   return !g || g->members[0] == p;
 }
+// The patches that shoot as shooter p: its group's members, or p alone
+// (the span then points at p, which must outlive it).
+inline IdSpan ShootsAs(const Mesh& mesh, const int32_t& p) {
+  const PatchGroup* g = GroupOf(mesh, p);
+  if (!g) return {&p, &p + 1};
+  return {g->members.data(), g->members.data() + g->members.size()};
+}
 // Patches alone plus groups: what progressive refinement has to shoot.
 inline size_t Shooters(const Mesh& mesh) {
   size_t n = mesh.patches.size();

@@ -22,6 +22,10 @@ constexpr long kMaxCorners = 64000000;
 // polygon of 10,000 vertices would become over a million elements.
 constexpr size_t kMaxPolygon = 1000;
 
+// The mean of a colour's channels: the luminance that the solver's noise
+// and first light and the subdivider's dividing factor compare.
+inline double Lum(const glm::dvec3& c) { return (c.r + c.g + c.b) / 3; }
+
 struct Material {
   std::string name;
   glm::dvec3 kd{0.5};  // diffuse reflectance, each channel in [0,1]

@@ -8,7 +8,6 @@
 
 namespace {
 double Abs(const glm::dvec3& u) { return std::abs(u.r) + std::abs(u.g) + std::abs(u.b); }
-double Lum(const glm::dvec3& u) { return (u.r + u.g + u.b) / 3; }
 
 // The delta form factor, at most, of a hemicube pixel seen cos_a off the
 // shooter's normal, for one whose top-centre pixel has pixel_ff (the
@@ -107,12 +106,9 @@ void Solver::CountDarkEmitters() {
   dark_emitters_ = 0;
   for (size_t p = 0; p < unshot_.size(); ++p) {
     if (blind_[p] || times_shot_[p] > 0 || !IsShooter(mesh_, int(p))) continue;
-    const PatchGroup* g = GroupOf(mesh_, int(p));
-    const int single[1] = {int(p)};
-    const int* members = g ? g->members.data() : single;
+    const int32_t shooter = int32_t(p);
     double ke = 0;
-    for (size_t i = 0; i < (g ? g->members.size() : 1); ++i)
-      ke += Abs(mesh_.faces[mesh_.patches[size_t(members[i])].face].emission);
+    for (int32_t m : ShootsAs(mesh_, shooter)) ke += Abs(mesh_.faces[mesh_.patches[size_t(m)].face].emission);
     if (ke > 0) ++dark_emitters_;
   }
 }
@@ -259,13 +255,10 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   // A group (groups.h) shoots Σ x·A of its members from one column, and
   // each member gives up exactly its own x: what leaves is what is shot.
   const PatchGroup* group = GroupOf(mesh_, p);
-  const int single[1] = {p};
-  const int* members = group ? group->members.data() : single;
-  const size_t count = group ? group->members.size() : 1;
+  const int32_t shooter = p;
   glm::dvec3 xa(0.0);  // Σ x·A of what shoots
   glm::dvec3 ka(0.0);  // Σ Ke·A of it, at its first shot in the wave (TrackDirect)
-  for (size_t i = 0; i < count; ++i) {
-    const int m = members[i];
+  for (const int32_t m : ShootsAs(mesh_, shooter)) {
     if (times_shot_[p] == 0) ka += mesh_.faces[mesh_.patches[m].face].emission * area_[m];
     // A shooter that sees no element sends its light out of the scene:
     // its unshot radiosity is spent, and it is never chosen again (nothing
@@ -336,14 +329,14 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
       const glm::dvec3 gain = xa * w;
       b_[e] += gain;
       if (direct) direct_[e] += float(Lum(ka * w));
-      if (noisy) noise_[e] += ShotNoise((gain.r + gain.g + gain.b) / 3, f, pixel(q));
+      if (noisy) noise_[e] += ShotNoise(Lum(gain), f, pixel(q));
       if (track_) Changed(e);
     } else {  // divided since the column was computed: each leaf gains alike
       q = ~q;
       mesh_.LeavesUnder(e, &leaves_);
       const glm::dvec3 w = f * (rho_[size_t(q)] / elem_area_[size_t(e)]);
       const glm::dvec3 gain = xa * w;
-      const double var = noisy ? ShotNoise((gain.r + gain.g + gain.b) / 3, f, pixel(q)) : 0;
+      const double var = noisy ? ShotNoise(Lum(gain), f, pixel(q)) : 0;
       const float first = direct ? float(Lum(ka * w)) : 0.0f;
       bool one_patch = true;
       for (int l : leaves_) {

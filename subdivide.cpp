@@ -7,7 +7,6 @@
 
 namespace {
 
-double Lum(const glm::dvec3& x) { return (x.r + x.g + x.b) / 3; }
 
 // Standard deviations of pixel noise a difference must pass to count
 // (subdivide.h).
