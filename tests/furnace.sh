@@ -118,7 +118,7 @@ for args in "-s 3000" ""; do
   want=1; [ -n "$args" ] && want=0  # the user's own limit is not a failure
   run_rad "$out" -r 64 $args "$T/white.obj"
   if [ "$RC" -eq "$want" ]; then pass "$what: exit status (got $RC, want $want) [${SECS}s]"
-  else fail "$what: exit status (got $RC$([ "$RC" -eq 124 ] && echo ' = timed out after 120s'), want $want)"; fi
+  else fail "$what: exit status (got $RC$([ "$RC" -eq 124 ] && echo " = timed out after ${LIMIT}s"), want $want)"; fi
   if grep -qi converge "$out.err"; then
     pass "$what: stderr says it did not converge (got \"$(grep -i -m1 converge "$out.err")\", want a line with 'converge')"
   else

@@ -46,16 +46,27 @@ check_rel() {
   esac
 }
 
+# run_limit: the seconds a run of the program may take before it counts
+# as hung: 120 on an idle machine, times the load per core when that is
+# higher (at most 10 times), so that a machine busy with other work
+# (make check beside other builds) does not fail a run that only waited
+# for a core. Read at each run, as the load changes.
+run_limit() {
+  awk -v n="$(nproc 2>/dev/null || echo 1)" '{ f = $1 / n; if (f < 1) f = 1; if (f > 10) f = 10
+    printf "%d\n", 120 * f }' /proc/loadavg 2>/dev/null || echo 120
+}
+
 # run_rad OUTDIR [ARGS...]: runs the program quietly (-q unless ARGS has -v) into OUTDIR under
-# `timeout 120`; stdout/stderr go to OUTDIR.out / OUTDIR.err. Sets RC
-# (exit status; 124 = timed out) and SECS (wall time), and prints the run
-# as a comment line for the log.
+# `timeout $(run_limit)`; stdout/stderr go to OUTDIR.out / OUTDIR.err. Sets RC
+# (exit status; 124 = timed out), LIMIT (that bound) and SECS (wall time),
+# and prints the run as a comment line for the log.
 run_rad() {
   local out=$1 t0 t1 quiet=-q; shift
   case " $* " in *" -v "*) quiet= ;; esac  # -v asked for: -q would contradict it
   mkdir -p "$out"
+  LIMIT=$(run_limit)
   t0=$(date +%s.%N)
-  timeout 120 "$RADIOSITY" ${quiet:+"$quiet"} -o "$out" "$@" >"$out.out" 2>"$out.err"
+  timeout "$LIMIT" "$RADIOSITY" ${quiet:+"$quiet"} -o "$out" "$@" >"$out.out" 2>"$out.err"
   RC=$?
   t1=$(date +%s.%N)
   SECS=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.1f", b - a }')

@@ -170,18 +170,18 @@ else
 fi
 
 # Progress: to a file, plain lines (no \r); with -q, nothing.
-timeout 120 "$RADIOSITY" -o "$T/prog" -j 1 -r 64 "$CB" >/dev/null 2>"$T/prog.err"; rc=$?
+timeout "$(run_limit)" "$RADIOSITY" -o "$T/prog" -j 1 -r 64 "$CB" >/dev/null 2>"$T/prog.err"; rc=$?
 n=$(grep -c '^radiosity: wave [0-9]* | [0-9]* shots | .* | [0-9]* workers* | ' "$T/prog.err")
 if [ "$rc" -eq 0 ] && [ "$n" -ge 1 ] && ! grep -q $'\r' "$T/prog.err" && grep -q 'worker 1 .*joined' "$T/prog.err"; then
   pass "progress to a file: $n plain lines, a join message ($(grep -m1 '| wave\|wave' "$T/prog.err"))"
 else
   fail "progress to a file (exit $rc, $n lines): $(head -c 400 "$T/prog.err")"
 fi
-timeout 120 "$RADIOSITY" -q -o "$T/quiet" -j 1 -r 64 "$CB" >/dev/null 2>"$T/quiet.err"
+timeout "$(run_limit)" "$RADIOSITY" -q -o "$T/quiet" -j 1 -r 64 "$CB" >/dev/null 2>"$T/quiet.err"
 [ ! -s "$T/quiet.err" ] && pass "-q: stderr empty" || fail "-q: stderr has $(head -c 200 "$T/quiet.err")"
 # On a terminal (script(1) gives a pty): \r-redrawn line.
 if command -v script >/dev/null 2>&1; then
-  script -qec "timeout 120 '$RADIOSITY' -o '$T/tty' -j 0 -r 64 --log-every 1 '$CB' >/dev/null" /dev/null >"$T/tty.out" 2>&1
+  script -qec "timeout $(run_limit) '$RADIOSITY' -o '$T/tty' -j 0 -r 64 --log-every 1 '$CB' >/dev/null" /dev/null >"$T/tty.out" 2>&1
   if grep -q $'\rwave [0-9]* | [0-9]* shots' "$T/tty.out" && grep -q 'converged' "$T/tty.out"; then
     pass "progress on a terminal: redrawn with \\r ($(grep -o $'\r' "$T/tty.out" | wc -l) returns)"
   else

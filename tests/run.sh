@@ -10,8 +10,8 @@
 # The tests are independent of each other, so they run side by side, as
 # many at a time as there are cores (TEST_JOBS to change it): many of them
 # wait on processes, timeouts and a browser more than they compute, and
-# with no more than that the ones that compute are not slowed past their
-# bounds (view.sh's run must end within 120 s of its page being looked at).
+# with no more than that the ones that compute are not slowed much (the
+# tests' bounds on a run, run_limit in tests/lib.sh, grow with the load).
 # Each one's output is kept in a file of its own and printed whole when it
 # ends, in the order they end.
 cd "$(dirname "$0")/.." || exit 1

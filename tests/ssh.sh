@@ -40,7 +40,7 @@ echo "# sshd on $HOST, HOME=$SSH_HOME, remote TMPDIR=$REMOTE_TMP"
 rad_run() {
   local name=$1; shift
   mkdir -p "$T/$name"
-  timeout 120 env -u SSH_AUTH_SOCK HOME="$SSH_HOME" "$RADIOSITY" -v -o "$T/$name" "$@" \
+  timeout "$(run_limit)" env -u SSH_AUTH_SOCK HOME="$SSH_HOME" "$RADIOSITY" -v -o "$T/$name" "$@" \
     >"$T/$name.out" 2>"$T/$name.err"
   RC=$?
   echo "# radiosity -v -o $name $* -> exit $RC"

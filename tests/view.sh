@@ -66,7 +66,7 @@ else fail "GET /mesh.bin: a mesh snapshot (got $code, magic '$magic')"; fi
 # Abuse and the browser at the same time; each prints ok/FAIL lines.
 python3 "$here/http_abuse.py" "$port" >"$T/abuse.out" 2>&1 &
 abuse=$!
-python3 "$here/view_page.py" "$url" "$T/live" >"$T/page.out" 2>&1
+python3 "$here/view_page.py" "$url" "$T/live" "$PID" >"$T/page.out" 2>&1
 page_rc=$?
 wait "$abuse"
 abuse_rc=$?

@@ -3,10 +3,11 @@ looks at the live page of a running `radiosity --view` and, once the run
 has written its outputs, at its view.html, and prints one line per check
 (ok: ... / FAIL: ...), as tests/lib.sh does.
 
-usage: view_page.py URL OUTDIR
+usage: view_page.py URL OUTDIR PID
   URL     the live page (what the program printed after "view on")
   OUTDIR  the run's -o directory: view.html, final.png and log.csv are
           read from there once view.html appears
+  PID     the run's process: view.html is waited for while it runs
 """
 
 import base64
@@ -213,8 +214,18 @@ def offline(b, outdir):
               (c["mean"], 100 * c["bad"], BAD_LEVEL, c["max"], MEAN_TOLERANCE, 100 * BAD_TOLERANCE))
 
 
+def running(pid):
+    """Whether process PID runs (an ended child its parent has not reaped
+    yet is a zombie, state Z, and counts as ended)."""
+    try:
+        with open("/proc/%d/stat" % pid) as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
 def main():
-    url, outdir = sys.argv[1], sys.argv[2]
+    url, outdir, pid = sys.argv[1], sys.argv[2], int(sys.argv[3])
     width, height = 512, 512
     t0 = time.monotonic()
     with Browser() as b:
@@ -222,9 +233,10 @@ def main():
         b.viewport(width, height)
         panel = live(b, url)
         print("# live page done at %.1f s" % (time.monotonic() - t0), flush=True)
-        # The run's outputs appear together when it has written them all.
-        deadline = time.monotonic() + 120
-        while not os.path.exists(os.path.join(outdir, "view.html")) and time.monotonic() < deadline:
+        # The run's outputs appear together when it has written them all;
+        # waited for until they are there or the run (process PID) has
+        # ended, however long a loaded machine makes it take.
+        while not os.path.exists(os.path.join(outdir, "view.html")) and running(pid):
             time.sleep(0.1)
         if panel:
             check(in_log(panel, log_rows(outdir)) is not None,
