@@ -88,13 +88,14 @@ void ShooterQueue::Flush() {
 
 void ShooterQueue::Set(int i, double bound) {
   CHECK(i >= 0 && i < n_);
-  bound_[i] = Clean(bound);
-  if (!taken_[i]) Leaf(i, bound_[i]);
+  if (taken_[i]) bound_[i] = Clean(bound);
+  else Leaf(i, Clean(bound));
 }
 
 void ShooterQueue::Take(int i) {
   CHECK(i >= 0 && i < n_ && !taken_[i]);
   taken_[i] = 1;
+  bound_[i] = tree_[leaves_ + size_t(i)];
   Leaf(i, -HUGE_VAL);
 }
 

@@ -53,9 +53,9 @@ class ShooterQueue {
   // What Set(i) will touch, fetched early (the owner setting many
   // shooters scattered over arrays larger than the caches).
   void Prefetch(int i) const {
-    __builtin_prefetch(&bound_[size_t(i)], 1);
     __builtin_prefetch(&taken_[size_t(i)]);
     __builtin_prefetch(&tree_[leaves_ + size_t(i)], 1);
+    __builtin_prefetch(&tree_[(leaves_ + size_t(i)) / 2], 1);  // where a grown bound's walk goes
   }
 
   // The untaken shooter with the greatest power(i) > 0, ties to the lowest
@@ -79,7 +79,9 @@ class ShooterQueue {
   // greatest bound of the untaken shooters under it.
   std::vector<double> tree_;
   std::vector<double> weight_;  // the same tree of the weights (taken or not)
-  std::vector<double> bound_;   // per shooter, taken or not
+  // Per shooter, its bound while it is taken (an untaken one's is its
+  // leaf): Set writes one array, not two, for the shooters a shot reaches.
+  std::vector<double> bound_;
   std::vector<uint8_t> taken_;
   std::vector<int32_t> dirty_;  // leaves shrunk since the last Flush
   bool rebuild_ = false;        // Expect: every node at the next Flush

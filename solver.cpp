@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "check.h"
 #include "groups.h"
@@ -22,6 +23,21 @@ double PixelFormFactor(double pixel_ff, double cos_a) {
   if (!(cos_a > 0)) return pixel_ff;
   const double m = std::max(cos_a, std::sqrt(std::max(0.0, 1 - cos_a * cos_a)));
   return pixel_ff * cos_a * m * m * m;
+}
+
+// v / s per channel, exactly as glm's operator/ (each an IEEE division:
+// the same bits), red and green as one two-lane division (GCC's vector
+// extension; SSE2's divpd on x86-64): Shoot divides ρ by an element's area
+// per covered element, and a division is dear.
+inline glm::dvec3 Over(const glm::dvec3& v, double s) {
+  typedef double Pair __attribute__((vector_size(16)));
+  Pair rg;
+  std::memcpy(&rg, &v.r, sizeof rg);
+  rg /= s;
+  glm::dvec3 out;
+  std::memcpy(&out.r, &rg, sizeof rg);
+  out.b = v.b / s;
+  return out;
 }
 
 // The variance that a shot's gain g (luminance) adds to an element's B
@@ -60,18 +76,17 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
 // are (split ones included).
 void Solver::PatchArrays() {
   const size_t n = mesh_.patches.size();
-  rho_.resize(n);
+  patch_.resize(n);
   center_.resize(n);
-  area_.resize(n);
   weight_.resize(n);
-  fsum_.assign(n, 0.0);
   if (!pixel_df_.empty()) pixel_df_.resize(n);  // noise tracked: per patch too
   for (size_t p = 0; p < n; ++p) {
     const MeshFace& f = mesh_.faces[mesh_.patches[p].face];
-    rho_[p] = f.rho;
+    patch_[p].rho = f.rho;
+    patch_[p].area = mesh_.patches[p].area;
+    patch_[p].fsum = 0;
     center_[p] = mesh_.patches[p].center;
-    area_[p] = mesh_.patches[p].area;
-    weight_[p] = area_[p] * std::max({f.rho.r, f.rho.g, f.rho.b});
+    weight_[p] = patch_[p].area * std::max({f.rho.r, f.rho.g, f.rho.b});
   }
   // A group's drift moves Σ of its members' powers: its key (members[0])
   // carries their weights summed, the other members none (never chosen).
@@ -88,11 +103,11 @@ void Solver::NewWave() {
   for (size_t e = 0; e < b_.size(); ++e) b_[e] = mesh_.FaceOf(int(e)).emission;
   if (pixel_ff_ > 0) noise_.assign(b_.size(), 0.0);
   if (track_direct_) direct_.assign(b_.size(), 0.0f);
-  unshot_.resize(mesh_.patches.size());
+  patch_.resize(mesh_.patches.size());
   lit_.resize(mesh_.patches.size());
-  for (size_t p = 0; p < unshot_.size(); ++p) {
-    unshot_[p] = mesh_.faces[mesh_.patches[p].face].emission;
-    lit_[p] = Abs(unshot_[p]) > 0;
+  for (size_t p = 0; p < patch_.size(); ++p) {
+    patch_[p].unshot = mesh_.faces[mesh_.patches[p].face].emission;
+    lit_[p] = Abs(patch_[p].unshot) > 0;
   }
   times_shot_.assign(mesh_.patches.size(), 0);
   CountDarkEmitters();
@@ -104,7 +119,7 @@ void Solver::NewWave() {
 // and have not in this wave: DirectDone() once none is left.
 void Solver::CountDarkEmitters() {
   dark_emitters_ = 0;
-  for (size_t p = 0; p < unshot_.size(); ++p) {
+  for (size_t p = 0; p < patch_.size(); ++p) {
     if (blind_[p] || times_shot_[p] > 0 || !IsShooter(mesh_, int(p))) continue;
     const int32_t shooter = int32_t(p);
     double ke = 0;
@@ -149,10 +164,16 @@ void Solver::TrackDirect() {
 void Solver::Resum() {
   unshot_sum_ = glm::dvec3(0.0);
   abs_sum_ = 0;
-  for (size_t p = 0; p < unshot_.size(); ++p) {
-    unshot_sum_ += unshot_[p] * mesh_.patches[p].area;
-    abs_sum_ += Abs(unshot_[p]) * mesh_.patches[p].area;
+  for (size_t p = 0; p < patch_.size(); ++p) {
+    unshot_sum_ += patch_[p].unshot * mesh_.patches[p].area;
+    abs_sum_ += Abs(patch_[p].unshot) * mesh_.patches[p].area;
   }
+}
+
+std::vector<glm::dvec3> Solver::unshot() const {
+  std::vector<glm::dvec3> u(patch_.size());
+  for (size_t p = 0; p < u.size(); ++p) u[p] = patch_[p].unshot;
+  return u;
 }
 
 glm::dvec3 Solver::Ambient() const {
@@ -164,13 +185,13 @@ glm::dvec3 Solver::Ambient() const {
 // overshot: the ambient estimate is light expected to arrive, and there
 // it will not, so shooting it would only have to be taken back later.
 glm::dvec3 Solver::ToShoot(int p) const {
-  if (!overshoot_ || !lit_[p]) return unshot_[p];
-  return unshot_[p] + rho_[p] * Ambient();
+  if (!overshoot_ || !lit_[p]) return patch_[p].unshot;
+  return patch_[p].unshot + patch_[p].rho * Ambient();
 }
 
 double Solver::Power(int p, const glm::dvec3& ambient) const {
-  const glm::dvec3 x = lit_[p] ? unshot_[p] + rho_[p] * ambient : unshot_[p];
-  return Abs(x) * area_[p];
+  const glm::dvec3 x = lit_[p] ? patch_[p].unshot + patch_[p].rho * ambient : patch_[p].unshot;
+  return Abs(x) * patch_[p].area;
 }
 
 // A lone patch's Power, a group's summed over its members (groups.h).
@@ -186,7 +207,7 @@ int Solver::SelectByScan(const std::vector<char>* taken) const {
   const glm::dvec3 amb = overshoot_ ? Ambient() : glm::dvec3(0.0);
   int best = -1;
   double best_power = 0;
-  for (size_t p = 0; p < unshot_.size(); ++p) {
+  for (size_t p = 0; p < patch_.size(); ++p) {
     if ((taken && (*taken)[p]) || blind_[p] || !IsShooter(mesh_, int(p))) continue;
     const double power = ShooterPower(int(p), amb);
     if (power > best_power) {
@@ -205,9 +226,9 @@ int Solver::SelectByScan(const std::vector<char>* taken) const {
 // (weight = area · max ρ): the drift Select adds to every bound, times
 // each patch's weight.
 double Solver::PatchBound(int p) const {
-  if (!overshoot_ || !lit_[p]) return Abs(unshot_[p]) * area_[p];
-  const glm::dvec3 shared = rho_[p] * base_;
-  return (Abs(unshot_[p] + shared) + 1e-9 * (Abs(unshot_[p]) + Abs(shared))) * area_[p];
+  if (!overshoot_ || !lit_[p]) return Abs(patch_[p].unshot) * patch_[p].area;
+  const glm::dvec3 shared = patch_[p].rho * base_;
+  return (Abs(patch_[p].unshot + shared) + 1e-9 * (Abs(patch_[p].unshot) + Abs(shared))) * patch_[p].area;
 }
 
 // Per shooter: a group's bound is its members' summed in the order
@@ -228,7 +249,7 @@ double Solver::Bound(int p) const {
 // when the drift since the last made Select look at too many patches.
 void Solver::Rebase() {
   base_ = overshoot_ ? Ambient() : glm::dvec3(0.0);
-  std::vector<double> bounds(unshot_.size());
+  std::vector<double> bounds(patch_.size());
   for (size_t p = 0; p < bounds.size(); ++p) bounds[p] = Bound(int(p));
   queue_.Build(bounds, weight_);
 }
@@ -238,13 +259,13 @@ int Solver::Select() {
   const glm::dvec3 d = glm::abs(amb - base_);
   double drift = (d.r + d.g + d.b) * (1 + 1e-9);
   if (!std::isfinite(drift)) {  // a run about to stop as diverging: no bound holds
-    std::vector<char> taken(unshot_.size());
+    std::vector<char> taken(patch_.size());
     for (size_t p = 0; p < taken.size(); ++p) taken[p] = queue_.Taken(int(p));
     return SelectByScan(&taken);
   }
   // Re-based once the patches visited since the last cost as much as
   // doing it (with drift 0 only ties are visited: nothing to gain).
-  if (drift > 0 && queue_.Visited() > long(unshot_.size()) / 2 + 64) {
+  if (drift > 0 && queue_.Visited() > long(patch_.size()) / 2 + 64) {
     Rebase();
     drift = 0;
   }
@@ -259,17 +280,17 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   glm::dvec3 xa(0.0);  // Σ x·A of what shoots
   glm::dvec3 ka(0.0);  // Σ Ke·A of it, at its first shot in the wave (TrackDirect)
   for (const int32_t m : ShootsAs(mesh_, shooter)) {
-    if (times_shot_[p] == 0) ka += mesh_.faces[mesh_.patches[m].face].emission * area_[m];
+    if (times_shot_[p] == 0) ka += mesh_.faces[mesh_.patches[m].face].emission * patch_[m].area;
     // A shooter that sees no element sends its light out of the scene:
     // its unshot radiosity is spent, and it is never chosen again (nothing
     // can send it light either, by reciprocity).
     if (column.empty()) blind_[m] = 1;
-    const glm::dvec3 x = column.empty() ? unshot_[m] : ToShoot(m);
-    abs_sum_ -= Abs(unshot_[m]) * area_[m];
-    unshot_[m] -= x;
-    abs_sum_ += Abs(unshot_[m]) * area_[m];
-    unshot_sum_ -= x * area_[m];
-    xa += x * area_[m];
+    const glm::dvec3 x = column.empty() ? patch_[m].unshot : ToShoot(m);
+    abs_sum_ -= Abs(patch_[m].unshot) * patch_[m].area;
+    patch_[m].unshot -= x;
+    abs_sum_ += Abs(patch_[m].unshot) * patch_[m].area;
+    unshot_sum_ -= x * patch_[m].area;
+    xa += x * patch_[m].area;
   }
   // Power arriving at element e and reflected: ρ_e · x · F · A_shooter.
   // Per element only B changes, by that over A_e; a patch's unshot
@@ -292,17 +313,17 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   const glm::dvec3 from = group ? group->center : center_[size_t(p)];
   const glm::dvec3 axis = group ? group->normal : mesh_.faces[mesh_.patches[p].face].normal;
   // A receiving patch's pixel delta form factor, once per shot, at its
-  // first form factor (fsum_ still 0).
+  // first form factor (its fsum still 0).
   auto pixel = [&](int32_t q) {
-    if (fsum_[q] == 0) {
+    if (patch_[q].fsum == 0) {
       const glm::dvec3 d = center_[size_t(q)] - from;
       const double len = glm::length(d);
       pixel_df_[size_t(q)] = PixelFormFactor(pixel_ff_, len > 0 ? glm::dot(d, axis) / len : 0.0);
     }
     return pixel_df_[size_t(q)];
   };
-  // Its patch's ρ and Σ F are fetched kAhead early too, from its patch id
-  // fetched 2 kAhead early.
+  // Its patch's record (ρ, Σ F: one line) is fetched kAhead early too,
+  // from its patch id fetched 2 kAhead early.
   for (size_t i = 0; i < n; ++i) {
     if (i + 2 * kAhead < n) __builtin_prefetch(&patch_of_[size_t(col[i + 2 * kAhead].elem)]);
     if (i + kAhead < n) {
@@ -310,10 +331,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
       __builtin_prefetch(&b_[size_t(a)], 1);
       __builtin_prefetch(&elem_area_[size_t(a)]);
       const int32_t qa = patch_of_[size_t(a)];
-      if (qa >= 0) {
-        __builtin_prefetch(&rho_[size_t(qa)]);
-        __builtin_prefetch(&fsum_[size_t(qa)], 1);
-      }
+      if (qa >= 0) __builtin_prefetch(&patch_[size_t(qa)], 1);
       if (noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
     }
     const int32_t e = col[i].elem;
@@ -325,7 +343,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     // element): two dense arrays read in id order, not a 56-byte Element
     // a cache line each.
     if (q >= 0) {
-      const glm::dvec3 w = f * (rho_[size_t(q)] / elem_area_[size_t(e)]);
+      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_area_[size_t(e)]);
       const glm::dvec3 gain = xa * w;
       b_[e] += gain;
       if (direct) direct_[e] += float(Lum(ka * w));
@@ -334,7 +352,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     } else {  // divided since the column was computed: each leaf gains alike
       q = ~q;
       mesh_.LeavesUnder(e, &leaves_);
-      const glm::dvec3 w = f * (rho_[size_t(q)] / elem_area_[size_t(e)]);
+      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_area_[size_t(e)]);
       const glm::dvec3 gain = xa * w;
       const double var = noisy ? ShotNoise(Lum(gain), f, pixel(q)) : 0;
       const float first = direct ? float(Lum(ka * w)) : 0.0f;
@@ -349,35 +367,33 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
       if (!one_patch) {  // and split since: each piece reflects its leaves' share
         for (int l : leaves_) {
           const int32_t r = patch_of_[size_t(l)];
-          if (fsum_[r] == 0) touched_.push_back(r);
-          fsum_[r] += f * (elem_area_[size_t(l)] / elem_area_[size_t(e)]);
+          if (patch_[r].fsum == 0) touched_.push_back(r);
+          patch_[r].fsum += f * (elem_area_[size_t(l)] / elem_area_[size_t(e)]);
         }
         continue;
       }
     }
-    if (fsum_[q] == 0) touched_.push_back(q);
-    fsum_[q] += f;
+    if (patch_[q].fsum == 0) touched_.push_back(q);
+    patch_[q].fsum += f;
   }
   queue_.Expect(touched_.size() + 1);
   for (size_t i = 0; i < touched_.size(); ++i) {
     if (i + kAhead < touched_.size()) {
       const size_t a = size_t(touched_[i + kAhead]);
-      __builtin_prefetch(&unshot_[a], 1);
-      __builtin_prefetch(&rho_[a]);
-      __builtin_prefetch(&area_[a]);
+      __builtin_prefetch(&patch_[a], 1);
       __builtin_prefetch(&lit_[a], 1);
       __builtin_prefetch(&blind_[a]);
       if (!mesh_.group_of.empty()) __builtin_prefetch(&mesh_.group_of[a]);
       queue_.Prefetch(int(a));
     }
     const int32_t q = touched_[i];
-    const glm::dvec3 reflected = rho_[q] * xa * fsum_[q];
-    fsum_[q] = 0;
+    const glm::dvec3 reflected = patch_[q].rho * xa * patch_[q].fsum;
+    patch_[q].fsum = 0;
     lit_[q] |= Abs(reflected) > 0;
     if (blind_[q]) continue;  // a hemicube speck: it could not pass it on
-    abs_sum_ -= Abs(unshot_[q]) * area_[q];
-    unshot_[q] += reflected / area_[q];
-    abs_sum_ += Abs(unshot_[q]) * area_[q];
+    abs_sum_ -= Abs(patch_[q].unshot) * patch_[q].area;
+    patch_[q].unshot += reflected / patch_[q].area;
+    abs_sum_ += Abs(patch_[q].unshot) * patch_[q].area;
     unshot_sum_ += reflected;
     // Light reaching a group's member moves its group's key, once a shot.
     const int32_t g = mesh_.group_of.empty() ? -1 : mesh_.group_of[size_t(q)];
@@ -398,7 +414,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   touched_.clear();
   ++times_shot_[p];
   // The running sums drift by rounding; a full sum every sweep bounds it.
-  if (++shots_ % long(unshot_.size()) == 0) Resum();
+  if (++shots_ % long(patch_.size()) == 0) Resum();
 }
 
 void Solver::TakeChanged(std::vector<int32_t>* out) {
@@ -491,21 +507,19 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
 }
 
 void Solver::Split(int p) {
-  const size_t from = unshot_.size(), n = mesh_.patches.size();
-  const double whole = area_[size_t(p)];
-  const glm::dvec3 power = unshot_[size_t(p)] * whole, rho = rho_[size_t(p)];
+  const size_t from = patch_.size(), n = mesh_.patches.size();
+  const double whole = patch_[size_t(p)].area;
+  const glm::dvec3 power = patch_[size_t(p)].unshot * whole, rho = patch_[size_t(p)].rho;
   const uint8_t lit = lit_[size_t(p)], blind = blind_[size_t(p)];
   std::vector<int> pieces{p};
   for (size_t q = from; q < n; ++q) pieces.push_back(int(q));
   const MeshFace& face = mesh_.faces[size_t(mesh_.patches[size_t(p)].face)];
-  rho_.resize(n, rho);
-  area_.resize(n);
+  patch_.resize(n);
+  for (size_t q = from; q < n; ++q) patch_[q].rho = rho;
   weight_.resize(n);
-  unshot_.resize(n);
   lit_.resize(n, lit);
   blind_.resize(n, blind);
   times_shot_.resize(n, 0);
-  fsum_.resize(n, 0.0);
   center_.resize(n);
   if (!pixel_df_.empty()) pixel_df_.resize(n);  // noise tracked
   // What each piece's leaves received, per channel, and the pieces' own
@@ -514,9 +528,9 @@ void Solver::Split(int p) {
   glm::dvec3 total(0.0);
   for (size_t i = 0; i < pieces.size(); ++i) {
     const int q = pieces[i];
-    area_[size_t(q)] = mesh_.patches[size_t(q)].area;
+    patch_[size_t(q)].area = mesh_.patches[size_t(q)].area;
     center_[size_t(q)] = mesh_.patches[size_t(q)].center;
-    weight_[size_t(q)] = area_[size_t(q)] * std::max({face.rho.r, face.rho.g, face.rho.b});
+    weight_[size_t(q)] = patch_[size_t(q)].area * std::max({face.rho.r, face.rho.g, face.rho.b});
     const IdSpan tops = mesh_.Tops(q);
     std::vector<int> stack(tops.begin(), tops.end());
     while (!stack.empty()) {
@@ -540,10 +554,10 @@ void Solver::Split(int p) {
     const int q = pieces[i];
     glm::dvec3 share;
     for (int c = 0; c < 3; ++c)
-      share[c] = total[c] > 0 ? got[i][c] / total[c] : area_[size_t(q)] / whole;
+      share[c] = total[c] > 0 ? got[i][c] / total[c] : patch_[size_t(q)].area / whole;
     glm::dvec3 part = i + 1 < pieces.size() ? power * share : left;
     left -= part;
-    unshot_[size_t(q)] = part / area_[size_t(q)];
+    patch_[size_t(q)].unshot = part / patch_[size_t(q)].area;
   }
   Resum();
   Rebase();
@@ -552,7 +566,7 @@ void Solver::Split(int p) {
 SolverState Solver::State() const {
   SolverState s;
   s.b = b_;
-  s.unshot = unshot_;
+  s.unshot = unshot();
   s.lit = lit_;
   s.blind = blind_;
   s.times_shot.assign(times_shot_.begin(), times_shot_.end());
@@ -582,7 +596,7 @@ bool Solver::Restore(const SolverState& s, std::string* err) {
   Grow();
   PatchArrays();
   b_ = s.b;
-  unshot_ = s.unshot;
+  for (size_t p = 0; p < np; ++p) patch_[p].unshot = s.unshot[p];
   lit_ = s.lit;
   blind_ = s.blind;
   times_shot_.assign(s.times_shot.begin(), s.times_shot.end());

@@ -125,7 +125,7 @@ class Solver {
   long shots() const { return shots_; }
   int TimesShot(int p) const { return times_shot_[p]; }
   const std::vector<glm::dvec3>& radiosity() const { return b_; }  // per element
-  const std::vector<glm::dvec3>& unshot() const { return unshot_; } // per patch
+  std::vector<glm::dvec3> unshot() const;  // per patch, a copy (State, tests)
   glm::dvec3 Ambient() const;  // the overshooting estimate before ρ
 
   SolverState State() const;
@@ -157,12 +157,20 @@ class Solver {
   std::vector<glm::dvec3> b_;       // per element
   std::vector<int32_t> patch_of_;   // per element, compact for Shoot
   std::vector<double> elem_area_;   // per element, likewise: its Element's area
-  std::vector<glm::dvec3> rho_;     // per patch: its face's, compact for Shoot
+  // Per patch, what Shoot reads and writes of each patch a column reaches,
+  // in one cache line: at 10^5 patches and more the patches a shot
+  // reaches are scattered over arrays larger than the caches, and each
+  // array was a line to wait for.
+  struct alignas(64) PatchShot {
+    glm::dvec3 unshot{0.0};
+    glm::dvec3 rho{0.0};  // its face's
+    double area = 0;
+    double fsum = 0;      // Σ F within one Shoot
+  };
+  static_assert(sizeof(PatchShot) == 64, "one cache line");
+  std::vector<PatchShot> patch_;
   std::vector<glm::dvec3> center_;  // per patch, for the noise's direction
-  std::vector<double> area_;        // per patch, likewise
-  std::vector<glm::dvec3> unshot_;  // per patch
-  std::vector<double> fsum_;        // per patch: Σ F within one Shoot
-  std::vector<int32_t> touched_;    // patches with fsum_ != 0
+  std::vector<int32_t> touched_;    // patches with fsum != 0
   std::vector<uint8_t> is_changed_; // per element: in changed_
   std::vector<double> noise_;       // per element when tracked: variance of Lum(B)
   double pixel_ff_ = 0;             // a top-centre pixel's delta form factor; 0: no noise
