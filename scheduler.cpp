@@ -32,7 +32,7 @@ bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wa
   // Shooter division: a split of patch p travels as the edit ~p, after
   // the pass's divisions (doc/protocol.txt, divide).
   const std::vector<int32_t> splits =
-      subdivider->SplitPass(*mesh, solver->direct(), solver->DirectDone());
+      subdivider->SplitPass(*mesh, solver->direct(), solver->DirectDone(), solver->times_shot());
   for (int32_t p : splits) {
     SplitPatch(mesh, p);
     solver->Split(p);

@@ -70,6 +70,7 @@ Checkpoint Filled() {
   c.options.seed = 7;
   c.options.mesh.patch_size = 0.25;
   c.options.sub.max_level = 3;
+  c.options.sub.split = false;  // the bytes pinned below predate split by default
   c.edits = {4, 0, 13, ~1};
   c.solver.b = {glm::dvec3(1, 2, 3), glm::dvec3(-0.0, 1e-300, 4.5)};
   c.solver.unshot = {glm::dvec3(0.5), glm::dvec3(0.25), glm::dvec3(0)};
