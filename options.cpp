@@ -339,6 +339,8 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   if (quiet && verbose) clash = "-q and -v contradict each other";
   else if (no_subdivide && !subdivide_limit.empty())
     clash = subdivide_limit + " limits dividing, and --no-subdivide divides nothing";
+  else if (no_subdivide && split)
+    clash = "--split divides shooters, and --no-subdivide divides nothing";
   else if (no_split && (split || !split_given.empty()))
     clash = (split_given.empty() ? std::string("--split") : split_given) +
             " splits shooters, and --no-split splits none";

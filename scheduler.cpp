@@ -409,7 +409,7 @@ void Scheduler::Begin() {
   timer_ = TurnTimer();
   base_ = t_->Now();
   log_every_ =
-      opts_.log_every > 0 ? opts_.log_every : std::max(1L, long(mesh_.patches.size()) / 100);
+      opts_.log_every > 0 ? opts_.log_every : std::max(1L, mesh_.BuiltPatches() / 100);
   unshot_ = solver_->UnshotFraction();
   if (!opts_.resume) Emit();
   last_checkpoint_ = t_->Now();

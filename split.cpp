@@ -76,6 +76,7 @@ void SplitPatch(Mesh* mesh, int patch) {
   // A divided top that gave its children away stays with the patch: its
   // children are what shoot and receive.
   mesh->splits.push_back(patch);
+  mesh->split_added += long(tops.size()) - 1;
 }
 
 // ---- the policy (Subdivider::SplitPass; subdivide.h) ------------------

@@ -114,6 +114,13 @@ struct SubdividerState {
   long passes = 0;
   double seconds = 0;
   long splits = 0;
+  // Shooter division's measurements, so that a resumed run splits as the
+  // run it continues (each is a function of when it was taken: the
+  // pieces made since are measured at the next pass).
+  bool measured = false;
+  double direct_mean = 0;
+  std::vector<double> spread;  // per patch
+  std::vector<uint8_t> near;   // per patch
 };
 
 class Subdivider {

@@ -428,6 +428,8 @@ TEST(Options, ContradictionsAreRefused) {
             "--split splits shooters, and --no-split splits none (try 'radiosity --help')");
   EXPECT_EQ(Error({"--no-split", "--split-near", "0.5", "s.obj"}),
             "--split-near splits shooters, and --no-split splits none (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--split", "--no-subdivide", "s.obj"}),
+            "--split divides shooters, and --no-subdivide divides nothing (try 'radiosity --help')");
   EXPECT_FALSE(Parses({"--no-split", "s.obj"}).sub.split);
   EXPECT_TRUE(Parses({"--split", "s.obj"}).sub.split);  // the default, said
   Parses({"--no-subdivide", "--no-waves", "s.obj"});  // the same said twice
