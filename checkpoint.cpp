@@ -180,7 +180,10 @@ std::string Implausible(const Checkpoint& k) {
     if (!std::isfinite(d.threshold) || d.threshold <= 0 || d.last_pass < -1 ||
         d.last_pass > s.shots || d.wave_start_leaves < 0 || d.divided_in_wave < 0 ||
         d.passes < 0 || !std::isfinite(d.seconds) || d.seconds < 0 ||
-        !std::isfinite(d.split_threshold) || d.split_threshold <= 0 || d.splits < 0)
+        !std::isfinite(d.split_threshold) || d.split_threshold <= 0 || d.splits < 0 ||
+        !std::isfinite(d.direct_mean) || d.direct_mean < 0 || d.spread.size() > k.patches ||
+        d.near.size() > k.patches ||
+        std::any_of(d.spread.begin(), d.spread.end(), [](double x) { return !(x >= 0 && x < HUGE_VAL); }))
       return "subdivision state out of range";
   }
   // log.csv's rows as LogCsv writes them: numbers, commas, newlines
@@ -363,6 +366,10 @@ std::string EncodeCheckpoint(const Checkpoint& c) {
     PutF64(&w, d.seconds);
     PutF64(&w, d.split_threshold);
     PutFixed64(&w, d.splits);
+    PutU8(&w, d.measured);
+    PutF64(&w, d.direct_mean);
+    PutArray(&w, d.spread, [&](double x) { PutF64(&w, x); });
+    PutArray(&w, d.near, [&](uint8_t x) { PutU8(&w, x); });
   }
   const RunState& r = c.run;
   PutFixed32(&w, r.wave);
@@ -451,6 +458,12 @@ bool DecodeCheckpoint(const std::string& bytes, Checkpoint* c, std::string* err)
     d.seconds = r.F64();
     d.split_threshold = r.F64();
     d.splits = long(r.I64());
+    d.measured = r.Bool();
+    d.direct_mean = r.F64();
+    d.spread.resize(r.Count(8));
+    for (double& x : d.spread) x = r.F64();
+    d.near.resize(r.Count(1));
+    for (uint8_t& x : d.near) x = r.Bool();
   }
   RunState& run = k.run;
   run.wave = r.I32();

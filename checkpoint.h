@@ -40,7 +40,9 @@
 //   subdiv    u8 present; if 1: f64 threshold, i64 last_pass, i64
 //             wave_start_leaves, i64 divided_in_wave, u8 finished, u8
 //             quiet, i64 passes, f64 seconds, f64 split_threshold, i64
-//             splits
+//             splits, u8 measured, f64 direct_mean, ARRAY<f64> spread
+//             per patch, ARRAY<u8> near per patch (shooter division's
+//             measurements; format 5)
 //   run       i32 wave, i64 wave_start, f64 best, i64 best_at, f64
 //             seconds, i64 columns, ARRAY<i32> pending patches
 //   log       ARRAY<u8>: log.csv's rows so far, without the header
@@ -60,7 +62,7 @@
 #include "scene.h"
 #include "subdivide.h"
 
-constexpr uint32_t kCheckpointVersion = 4;
+constexpr uint32_t kCheckpointVersion = 5;
 
 // The options that shape the answer: a checkpoint is resumed only with
 // the same ones.

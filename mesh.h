@@ -175,8 +175,11 @@ struct Mesh {
   // The patches SplitPatch() split, in the order it ran (a patch may be
   // split more than once): its pieces are the patches it appended.
   std::vector<int32_t> splits;
+  long split_added = 0;  // patches SplitPatch() appended
 
   long LeafCount() const { return long(elems.size()) - divided; }
+  // The patches as BuildMesh made them, however many splits since.
+  long BuiltPatches() const { return long(patches.size()) - split_added; }
 
   IdSpan Tops(int patch) const {
     const Patch& p = patches[size_t(patch)];

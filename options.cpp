@@ -126,7 +126,8 @@ const char kUsage[] =
     "      --max-level N      deepest division below the built elements, 0..12 (default 2)\n"
     "      --wave-fraction F  a new wave after F of the elements divided (default 0.2)\n"
     "      --split            split shooter patches lit unevenly or with receivers\n"
-    "                         close (default: --no-split, patches stay as built)\n"
+    "                         close (the default)\n"
+    "      --no-split         keep the shooter patches as built\n"
     "      --split-floor F    lowest shooter-division threshold, implies --split\n"
     "                         (default 0.8)\n"
     "      --split-near K     split a patch with receivers nearer than K times its\n"
@@ -219,7 +220,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   bool wave_fraction = false;
   std::string subdivide_limit;  // the last of --subdivide-floor, --min-element, --max-level, --split-floor
   std::string split_given;      // the last of --split-floor, --split-near
-  bool no_split = false;
+  bool no_split = false, split = false;  // as given: shooter division is on by default
   std::string& secret_file = o.secret_file;
   opterr = 0;
   optind = 0;  // glibc: start afresh, so that a second call parses its own argv
@@ -283,17 +284,15 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
         ok = Number("--subdivide-floor", optarg, 1e-3, 100, &o.sub.floor, err);
         subdivide_limit = "--subdivide-floor";
         break;
-      case kSplit: o.sub.split = true; break;
+      case kSplit: split = true; break;
       case kNoSplit: no_split = true; break;
       case kSplitNear:
         ok = Number("--split-near", optarg, 0, 100, &o.sub.split_near, err);
         subdivide_limit = split_given = "--split-near";
-        o.sub.split = true;
         break;
       case kSplitFloor:
         ok = Number("--split-floor", optarg, 1e-3, 100, &o.sub.split_floor, err);
         subdivide_limit = split_given = "--split-floor";
-        o.sub.split = true;
         break;
       case kMinElement:
         ok = Number("--min-element", optarg, 1e-300, 1e300, &o.sub.min_size, err);
@@ -340,12 +339,15 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   if (quiet && verbose) clash = "-q and -v contradict each other";
   else if (no_subdivide && !subdivide_limit.empty())
     clash = subdivide_limit + " limits dividing, and --no-subdivide divides nothing";
-  else if (no_split && o.sub.split)
+  else if (no_subdivide && split)
+    clash = "--split divides shooters, and --no-subdivide divides nothing";
+  else if (no_split && (split || !split_given.empty()))
     clash = (split_given.empty() ? std::string("--split") : split_given) +
             " splits shooters, and --no-split splits none";
   else if (wave_fraction && (no_subdivide || no_waves))
     clash = "--wave-fraction starts waves, and " +
             std::string(no_subdivide ? "--no-subdivide" : "--no-waves") + " has none";
+  if (no_split) o.sub.split = false;
   if (!clash.empty()) {
     *err = clash + " (try 'radiosity --help')";
     return Parsed::kError;

@@ -32,7 +32,7 @@ bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wa
   // Shooter division: a split of patch p travels as the edit ~p, after
   // the pass's divisions (doc/protocol.txt, divide).
   const std::vector<int32_t> splits =
-      subdivider->SplitPass(*mesh, solver->direct(), solver->DirectDone());
+      subdivider->SplitPass(*mesh, solver->direct(), solver->DirectDone(), solver->times_shot());
   for (int32_t p : splits) {
     SplitPatch(mesh, p);
     solver->Split(p);
@@ -409,7 +409,7 @@ void Scheduler::Begin() {
   timer_ = TurnTimer();
   base_ = t_->Now();
   log_every_ =
-      opts_.log_every > 0 ? opts_.log_every : std::max(1L, long(mesh_.patches.size()) / 100);
+      opts_.log_every > 0 ? opts_.log_every : std::max(1L, mesh_.BuiltPatches() / 100);
   unshot_ = solver_->UnshotFraction();
   if (!opts_.resume) Emit();
   last_checkpoint_ = t_->Now();

@@ -124,6 +124,7 @@ class Solver {
   bool Dark() const { return emitted_ == 0; }
   long shots() const { return shots_; }
   int TimesShot(int p) const { return times_shot_[p]; }
+  const std::vector<int>& times_shot() const { return times_shot_; } // per patch, this wave
   const std::vector<glm::dvec3>& radiosity() const { return b_; }  // per element
   std::vector<glm::dvec3> unshot() const;  // per patch, a copy (State, tests)
   glm::dvec3 Ambient() const;  // the overshooting estimate before ρ

@@ -76,6 +76,7 @@ void SplitPatch(Mesh* mesh, int patch) {
   // A divided top that gave its children away stays with the patch: its
   // children are what shoot and receive.
   mesh->splits.push_back(patch);
+  mesh->split_added += long(tops.size()) - 1;
 }
 
 // ---- the policy (Subdivider::SplitPass; subdivide.h) ------------------
@@ -203,10 +204,11 @@ void Subdivider::Spread(const Mesh& mesh, const std::vector<float>& direct, size
 }
 
 std::vector<int32_t> Subdivider::SplitPass(const Mesh& mesh, const std::vector<float>& direct,
-                                           bool direct_done) {
+                                           bool direct_done, const std::vector<int>& times_shot) {
   std::vector<int32_t> out;
   if (!opts_.split) return out;
   CHECK(direct.size() == mesh.elems.size());
+  CHECK(times_shot.size() == mesh.patches.size());
   FindNear(mesh, near_.size());
   // Every patch when the wave's direct light is complete, then the pieces
   // made since (their pieces' light is as it was then: divisions in the
@@ -223,7 +225,8 @@ std::vector<int32_t> Subdivider::SplitPass(const Mesh& mesh, const std::vector<f
     if (close) near_[p] = 0;
   }
   splits_ += long(out.size());
-  divided_in_wave_ += long(out.size());
+  for (int32_t p : out)
+    if (times_shot[size_t(p)] > 0) ++divided_in_wave_;
   if (measured_) split_threshold_ = std::max(opts_.split_floor, split_threshold_ * opts_.decay);
   return out;
 }

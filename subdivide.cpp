@@ -282,6 +282,10 @@ SubdividerState Subdivider::State() const {
   s.quiet = quiet_;
   s.passes = passes_;
   s.seconds = seconds_;
+  s.measured = measured_;
+  s.direct_mean = direct_mean_;
+  s.spread = spread_;
+  s.near = near_;
   return s;
 }
 
@@ -291,8 +295,10 @@ void Subdivider::Restore(const SubdividerState& s) {
   synced_.clear();
   pass_ambient_.clear();
   pass_mean_.clear();
-  measured_ = false;
-  near_.clear();
+  measured_ = s.measured;
+  direct_mean_ = s.direct_mean;
+  spread_ = s.spread;
+  near_ = s.near;
   threshold_ = s.threshold;
   split_threshold_ = s.split_threshold;
   splits_ = s.splits;

@@ -93,7 +93,7 @@ struct SubdivideOptions {
   double wave_fraction = 0.2;  // of the wave's starting elements divided
   long between = 10;       // shots between passes (at least 10)
   double quiet = 0.002;    // a pass dividing under this fraction of the leaves is quiet
-  bool split = false;           // shooter division (SplitPass): --split
+  bool split = true;            // shooter division (SplitPass); --no-split: false
   double split_threshold = 0.9; // the spread a patch must exceed, at first
   double split_floor = 0.8;     // ... lowered by `decay` every pass down to this
   double split_near = 0.35;     // receivers nearer than this × its width split it; 0: never
@@ -114,6 +114,13 @@ struct SubdividerState {
   long passes = 0;
   double seconds = 0;
   long splits = 0;
+  // Shooter division's measurements, so that a resumed run splits as the
+  // run it continues (each is a function of when it was taken: the
+  // pieces made since are measured at the next pass).
+  bool measured = false;
+  double direct_mean = 0;
+  std::vector<double> spread;  // per patch
+  std::vector<uint8_t> near;   // per patch
 };
 
 class Subdivider {
@@ -164,9 +171,14 @@ class Subdivider {
   // children their parent's direct light: the pieces' means stay), so a
   // resumed run, which measures them at its first pass, splits alike.
   // Lowers the split threshold once the spreads are measured. Empty
-  // without opts.split.
+  // without opts.split. times_shot: Solver::times_shot(), this wave's
+  // shots per patch. A split counts toward ending the wave (WaveOver) only
+  // where the patch has already shot in it: one that has not shot loses
+  // nothing (its unshot power is shared out exactly and shot from the
+  // pieces), so it needs no new wave; one that has shot shot from its
+  // centre, which only a new wave redoes.
   std::vector<int32_t> SplitPass(const Mesh& mesh, const std::vector<float>& direct,
-                                 bool direct_done);
+                                 bool direct_done, const std::vector<int>& times_shot);
   long splits() const { return splits_; }
   bool splitting() const { return opts_.split; }
   // A wave's first light is complete and not yet measured: SplitPass is

@@ -89,6 +89,10 @@ Checkpoint Filled() {
   c.subdivider.seconds = 0.01;
   c.subdivider.split_threshold = 0.4;
   c.subdivider.splits = 1;
+  c.subdivider.measured = true;
+  c.subdivider.direct_mean = 0.5;
+  c.subdivider.spread = {0.25, 0, 0.9};
+  c.subdivider.near = {0, 1, 0};
   c.run.wave = 2;
   c.run.wave_start = 30;
   c.run.best = HUGE_VAL;
@@ -147,11 +151,11 @@ TEST(Checkpoint, RoundTrip) {
 // direct light array's count, 8, in 4) pinned byte for byte (the trailing
 // SHA-256 covers every byte before it), and the scene and mesh hashes a
 // checkpoint is checked against are those format 1 had.
-TEST(Checkpoint, BytesAndHashesAreThoseOfFormat4) {
+TEST(Checkpoint, BytesAndHashesAreThoseOfFormat5) {
   const std::string bytes = EncodeCheckpoint(Filled());
-  EXPECT_EQ(bytes.size(), 667u);
+  EXPECT_EQ(bytes.size(), 719u);
   EXPECT_EQ(Hex(bytes.substr(bytes.size() - 32)),
-            "1485f07040571ab43fa70735736644d289d1379c89d2d75ab1a4ddee8bb1a7ec");
+            "4c02883dff893dbf1347c2158cb99abcd4cfe45ae64c48131efb24ec618a9525");
   EXPECT_EQ(Hex(SceneHash(ShadowScene())),
             "e5ded178170e67915e7e2c974f2f76313e56922c54aa9ce557da0635a7ee8021");
   EXPECT_EQ(MeshHash(MakeMesh(ShadowScene(), ShadowMesh())), 0x4305479c346ad8daull);
@@ -191,7 +195,7 @@ TEST(Checkpoint, ForeignAndOtherVersionsAreRefused) {
   EXPECT_EQ(Error(""), "not a radiosity checkpoint (no RADCKPT magic)");
   std::string v1 = EncodeCheckpoint(Filled());
   v1[8] = 1;
-  EXPECT_EQ(Error(v1), "checkpoint format version 1, this radiosity reads 4");
+  EXPECT_EQ(Error(v1), "checkpoint format version 1, this radiosity reads 5");
 }
 
 // An edited checkpoint, re-hashed so that its checksum holds: values no
@@ -223,6 +227,8 @@ TEST(Checkpoint, ValuesAreCheckedAfterTheChecksum) {
       {"pending patch 3 out of range or listed twice", [](Checkpoint* c) { c->run.pending = {3}; }},
       {"pending patch 1 out of range or listed twice", [](Checkpoint* c) { c->run.pending = {1, 1}; }},
       {"subdivision state out of range", [](Checkpoint* c) { c->subdivider.seconds = -1; }},
+      {"subdivision state out of range", [](Checkpoint* c) { c->subdivider.spread[1] = NAN; }},
+      {"subdivision state out of range", [](Checkpoint* c) { c->subdivider.near.push_back(0); }},
       {"element and patch counts out of range", [](Checkpoint* c) { c->elements = 1u << 30; }},
       {"log rows that are not numbers", [](Checkpoint* c) { c->log = "\x1b[2J\n"; }},
   };

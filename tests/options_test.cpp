@@ -81,6 +81,8 @@ TEST(Options, Defaults) {
   EXPECT_EQ(o.sub.floor, 0.2);
   EXPECT_EQ(o.sub.threshold, 0.5);
   EXPECT_EQ(o.sub.max_level, 2);
+  EXPECT_TRUE(o.sub.split);
+  EXPECT_EQ(o.sub.split_near, 0.35);
   EXPECT_EQ(o.width, 512);
   EXPECT_EQ(o.height, 512);
   EXPECT_EQ(o.format, "png");
@@ -422,6 +424,14 @@ TEST(Options, ContradictionsAreRefused) {
             "--min-element limits dividing, and --no-subdivide divides nothing (try 'radiosity --help')");
   EXPECT_EQ(Error({"--no-waves", "--wave-fraction", "0.5", "s.obj"}),
             "--wave-fraction starts waves, and --no-waves has none (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--split", "--no-split", "s.obj"}),
+            "--split splits shooters, and --no-split splits none (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--no-split", "--split-near", "0.5", "s.obj"}),
+            "--split-near splits shooters, and --no-split splits none (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--split", "--no-subdivide", "s.obj"}),
+            "--split divides shooters, and --no-subdivide divides nothing (try 'radiosity --help')");
+  EXPECT_FALSE(Parses({"--no-split", "s.obj"}).sub.split);
+  EXPECT_TRUE(Parses({"--split", "s.obj"}).sub.split);  // the default, said
   Parses({"--no-subdivide", "--no-waves", "s.obj"});  // the same said twice
 }
 

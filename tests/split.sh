@@ -1,7 +1,8 @@
 #!/bin/bash
 # End-to-end test of shooter division (man page, SUBDIVISION):
 #  * on the Cornell box the blocks' contact shadows split patches (more
-#    patches at the end than the 628 built) with --split; without, 628;
+#    patches at the end than the 628 built) by default and with --split;
+#    with --no-split, 628;
 #  * a checkpoint taken after splits (the run stopped by -s writes it)
 #    resumes to the uninterrupted run's result.csv byte for byte (-j 0);
 #  * -j 2 splits too, and its workers follow the splits: none is lost
@@ -27,9 +28,12 @@ if [ -n "$n" ] && [ "$n" -gt 628 ]; then
 else
   fail "cornell: patches split (got '$n' patches at the end, want more than 628)"
 fi
-run_ok "cornell, no --split" "$T/none" -v -j 0 -s 300 -r 64 "$CORNELL" &&
-  [ "$(patches "$T/none")" = 628 ] && pass "without --split: the 628 patches as built" ||
-  fail "without --split: the 628 patches as built (got '$(patches "$T/none")')"
+run_ok "cornell, default" "$T/default" -v -j 0 -s 300 -r 64 "$CORNELL" &&
+  [ "$(patches "$T/default")" -gt 628 ] && pass "by default: patches split" ||
+  fail "by default: patches split (got '$(patches "$T/default")', want more than 628)"
+run_ok "cornell, --no-split" "$T/none" -v -j 0 -s 300 -r 64 --no-split "$CORNELL" &&
+  [ "$(patches "$T/none")" = 628 ] && pass "with --no-split: the 628 patches as built" ||
+  fail "with --no-split: the 628 patches as built (got '$(patches "$T/none")')"
 
 # Stopped after the splits began, checkpointed, resumed.
 total=$(awk -F, 'END { print $2 }' "$T/whole/log.csv")

@@ -157,27 +157,29 @@ TEST(Split, PolicySplitsUnevenPatchesOnly) {
   so.split_near = 0;  // by light only here
   Subdivider sub(&m, so);
   std::vector<float> d(m.elems.size(), 1.0f);
+  std::vector<int> shot(m.patches.size(), 0);
   d[size_t(m.Tops(2)[0])] = 0.0f;  // patch 2: one dark piece, spread 0.85
   d[size_t(m.Tops(1)[3])] = 0.1f;  // patch 1: spread 0.77
   for (int p : m.faces[1].patches)  // the light: uneven, never split
     d[size_t(m.Tops(p)[0])] = 0.0f;
   // Before every emitter shot, nothing, and the threshold waits.
-  EXPECT_TRUE(sub.SplitPass(m, d, false).empty());
+  EXPECT_TRUE(sub.SplitPass(m, d, false, shot).empty());
   EXPECT_EQ(sub.State().split_threshold, so.split_threshold);
-  EXPECT_TRUE(sub.SplitPass(m, d, true).empty());  // 0.85 < 0.9
-  EXPECT_EQ(sub.SplitPass(m, d, true), (std::vector<int32_t>{2}));  // at the floor, 0.8
+  EXPECT_TRUE(sub.SplitPass(m, d, true, shot).empty());  // 0.85 < 0.9
+  EXPECT_EQ(sub.SplitPass(m, d, true, shot), (std::vector<int32_t>{2}));  // at the floor, 0.8
   SplitPatch(&m, 2);  // into pieces of one leaf each: none splits again
   d.resize(m.elems.size(), 1.0f);
+  shot.resize(m.patches.size(), 0);
   // Measured once a wave: a change since counts from the next wave.
   d[size_t(m.Tops(3)[0])] = 0.0f;
-  EXPECT_TRUE(sub.SplitPass(m, d, true).empty());
+  EXPECT_TRUE(sub.SplitPass(m, d, true, shot).empty());
   EXPECT_EQ(sub.splits(), 1);
   EXPECT_EQ(sub.State().split_threshold, so.split_floor);
   sub.StartWave(m);
-  EXPECT_EQ(sub.SplitPass(m, d, true), (std::vector<int32_t>{3}));
+  EXPECT_EQ(sub.SplitPass(m, d, true, shot), (std::vector<int32_t>{3}));
   so.split = false;
   Subdivider off(&m, so);
-  EXPECT_TRUE(off.SplitPass(m, d, true).empty());
+  EXPECT_TRUE(off.SplitPass(m, d, true, shot).empty());
 }
 
 // Closeness: a face hanging just over one floor patch, facing it, splits
@@ -195,7 +197,8 @@ TEST(Split, CloseReceiversSplitAPatch) {
   so.split = true;
   Subdivider sub(&m, so);
   const std::vector<float> d(m.elems.size(), 1.0f);
-  std::vector<int32_t> got = sub.SplitPass(m, d, false);
+  const std::vector<int> shot(m.patches.size(), 0);
+  std::vector<int32_t> got = sub.SplitPass(m, d, false, shot);
   EXPECT_NE(std::find(got.begin(), got.end(), under), got.end());
   for (int p : m.faces[0].patches) {
     if (p == under) continue;
@@ -203,7 +206,29 @@ TEST(Split, CloseReceiversSplitAPatch) {
   }
   so.split_near = 0;
   Subdivider far(&m, so);
-  EXPECT_TRUE(far.SplitPass(m, d, false).empty());
+  EXPECT_TRUE(far.SplitPass(m, d, false, shot).empty());
+}
+
+// A split ends the wave only where the patch has already shot in it: a
+// patch that has not loses nothing (its unshot power goes to the pieces),
+// and a converged wave with only such splits is the last one.
+TEST(Split, OnlySplitsOfShotPatchesEndTheWave) {
+  Scene s = Floor();
+  AddFace(&s, {{0.1, 0.05, 0.1}, {0.2, 0.05, 0.1}, {0.2, 0.05, 0.2}, {0.1, 0.05, 0.2}},
+          glm::dvec3(0.5), glm::dvec3(0));  // facing down, close over one floor patch
+  Mesh m = MakeMesh(s, Coarse());
+  SubdivideOptions so;
+  so.split = true;
+  const std::vector<float> d(m.elems.size(), 1.0f);
+  Subdivider fresh(&m, so);
+  std::vector<int> shot(m.patches.size(), 0);
+  const std::vector<int32_t> got = fresh.SplitPass(m, d, false, shot);
+  ASSERT_FALSE(got.empty());
+  EXPECT_FALSE(fresh.WaveOver(true));
+  Subdivider again(&m, so);
+  shot[size_t(got[0])] = 1;
+  EXPECT_EQ(again.SplitPass(m, d, false, shot), got);
+  EXPECT_TRUE(again.WaveOver(true));
 }
 
 // The direct light is the emitters' first shots' and nothing else: two
