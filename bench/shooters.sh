@@ -1,7 +1,8 @@
 #!/bin/sh
 # Shooter division (--split; man page, SUBDIVISION): a cube on a table top
 # under a ceiling light (bench/make_table.py). The cube's and the table
-# top's mean red radiosity, default against --split, each against a
+# top's mean red radiosity, --no-split against the default (shooter
+# division), each against a
 # reference with patches REF_DIV times smaller (default 4) and one element
 # per patch, to -e 1e-4, and the reference's own refinement (2 x REF_DIV)
 # when REFINE=1 (hours on a loaded machine). Prints a Markdown table.
@@ -46,5 +47,5 @@ row "reference (patches / $REF_DIV, 1 element, -e 1e-4)" "$ref"
 if [ "${REFINE:-0}" = 1 ]; then
   row "its refinement (patches / $((2 * REF_DIV)))" "$(run fine -e 1e-4 --patch-size "$(awk -v p="$P" -v k="$REF_DIV" 'BEGIN { print p / k / 2 }')" --elements 1)"
 fi
-row "default" "$(run default)"
-row "--split" "$(run split --split)"
+row "--no-split" "$(run nosplit --no-split)"
+row "default (shooter division)" "$(run default)"
