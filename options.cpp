@@ -128,10 +128,9 @@ const char kUsage[] =
     "      --split            split shooter patches lit unevenly or with receivers\n"
     "                         close (the default)\n"
     "      --no-split         keep the shooter patches as built\n"
-    "      --split-floor F    lowest shooter-division threshold, implies --split\n"
-    "                         (default 0.8)\n"
+    "      --split-floor F    lowest shooter-division threshold (default 0.8)\n"
     "      --split-near K     split a patch with receivers nearer than K times its\n"
-    "                         width, 0: never; implies --split (default 0.35)\n"
+    "                         width, 0: never (default 0.35)\n"
     "      --no-rotate        keep the hemicube aligned (default: turned per shot)\n"
     "      --seed N           seed of the hemicube turns (default 1)\n"
     "      --log-every N      shots between log.csv rows (default: patches / 100)\n"
@@ -218,7 +217,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   // Given on the command line: options that contradict others.
   bool quiet = false, verbose = false, no_subdivide = false, no_waves = false;
   bool wave_fraction = false;
-  std::string subdivide_limit;  // the last of --subdivide-floor, --min-element, --max-level, --split-floor
+  std::string subdivide_limit;  // the last of --subdivide-floor, --min-element, --max-level, --split-*
   std::string split_given;      // the last of --split-floor, --split-near
   bool no_split = false, split = false;  // as given: shooter division is on by default
   std::string& secret_file = o.secret_file;
