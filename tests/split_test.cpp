@@ -182,13 +182,19 @@ TEST(Split, PolicySplitsUnevenPatchesOnly) {
   EXPECT_TRUE(off.SplitPass(m, d, true, shot).empty());
 }
 
-// Closeness: a face hanging just over one floor patch, facing it, splits
-// that patch at the first pass whatever the light; the others stay.
-TEST(Split, CloseReceiversSplitAPatch) {
+// The floor with a small face hanging just over one of its patches,
+// facing it (closeness splits that patch).
+Scene FloorUnderAFace() {
   Scene s = Floor();
   AddFace(&s, {{0.1, 0.05, 0.1}, {0.2, 0.05, 0.1}, {0.2, 0.05, 0.2}, {0.1, 0.05, 0.2}},
           glm::dvec3(0.5), glm::dvec3(0));  // facing down
-  Mesh m = MakeMesh(s, Coarse());
+  return s;
+}
+
+// Closeness: a face hanging just over one floor patch, facing it, splits
+// that patch at the first pass whatever the light; the others stay.
+TEST(Split, CloseReceiversSplitAPatch) {
+  Mesh m = MakeMesh(FloorUnderAFace(), Coarse());
   int under = -1;
   for (int p : m.faces[0].patches)
     if (glm::length(m.patches[p].center - glm::dvec3(0.25, 0, 0.25)) < 1e-9) under = p;
@@ -213,10 +219,7 @@ TEST(Split, CloseReceiversSplitAPatch) {
 // patch that has not loses nothing (its unshot power goes to the pieces),
 // and a converged wave with only such splits is the last one.
 TEST(Split, OnlySplitsOfShotPatchesEndTheWave) {
-  Scene s = Floor();
-  AddFace(&s, {{0.1, 0.05, 0.1}, {0.2, 0.05, 0.1}, {0.2, 0.05, 0.2}, {0.1, 0.05, 0.2}},
-          glm::dvec3(0.5), glm::dvec3(0));  // facing down, close over one floor patch
-  Mesh m = MakeMesh(s, Coarse());
+  Mesh m = MakeMesh(FloorUnderAFace(), Coarse());
   SubdivideOptions so;
   so.split = true;
   const std::vector<float> d(m.elems.size(), 1.0f);
