@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/load.h"
 #include "clock.h"
 #include "hemicube.h"
 #include "scheduler.h"
@@ -66,17 +67,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   Scene scene;
-  std::string err;
-  std::vector<std::string> warnings;
-  if (!LoadScene(argv[1], &scene, &err, &warnings)) {
-    std::fprintf(stderr, "bench: %s\n", err.c_str());
-    return 2;
-  }
   Mesh mesh;
-  if (!BuildMesh(scene, MeshOptions(), &mesh, &err)) {
-    std::fprintf(stderr, "bench: %s\n", err.c_str());
-    return 2;
-  }
+  LoadMeshOrDie("bench", argv[1], &scene, &mesh);
   std::string name = argv[1];
   name = name.substr(name.find_last_of('/') + 1);
   for (int a = 2; a < argc; ++a) {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/load.h"
 #include "clock.h"
 #include "hemicube.h"
 #include "mesh.h"
@@ -26,12 +27,6 @@ int main(int argc, char** argv) {
     return 2;
   }
   Scene scene;
-  std::string err;
-  std::vector<std::string> warnings;
-  if (!LoadScene(argv[1], &scene, &err, &warnings)) {
-    std::fprintf(stderr, "radiosity-column: %s\n", err.c_str());
-    return 2;
-  }
   MeshOptions mo;
   if (argc > 4) mo.patch_size = std::atof(argv[4]);
   if (argc > 5) mo.elements_per_patch = std::atoi(argv[5]);
@@ -39,10 +34,7 @@ int main(int argc, char** argv) {
   // the column sees a finely cut mesh rather than its joined surfaces.
   if (argc > 6) mo.join = std::atoi(argv[6]) != 0;
   Mesh mesh;
-  if (!BuildMesh(scene, mo, &mesh, &err)) {
-    std::fprintf(stderr, "radiosity-column: %s\n", err.c_str());
-    return 2;
-  }
+  LoadMeshOrDie("radiosity-column", argv[1], &scene, &mesh, mo);
   std::string name = argv[1];
   name = name.substr(name.find_last_of('/') + 1);
   const int res = std::atoi(argv[2]);

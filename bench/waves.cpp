@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/load.h"
 #include "clock.h"
 #include "mesh.h"
 #include "results.h"
@@ -43,10 +44,9 @@ struct Curve {
 Curve Run(const Scene& scene, int epp, bool subdivide, const Mesh& ref,
           const std::vector<glm::dvec3>& ref_b) {
   Mesh mesh;
-  std::string err;
   MeshOptions mo;
   mo.elements_per_patch = epp;
-  if (!BuildMesh(scene, mo, &mesh, &err)) std::abort();
+  BuildMeshOrDie("radiosity-waves", scene, mo, &mesh);
   Solver solver(mesh, true);
   Subdivider sub(&mesh, SubdivideOptions());
   RunOptions o;
@@ -80,12 +80,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   Scene scene;
-  std::string err;
-  std::vector<std::string> warnings;
-  if (!LoadScene(argv[1], &scene, &err, &warnings)) {
-    std::fprintf(stderr, "radiosity-waves: %s\n", err.c_str());
-    return 2;
-  }
+  LoadSceneOrDie("radiosity-waves", argv[1], &scene);
   std::string name = argv[1];
   name = name.substr(name.find_last_of('/') + 1);
   name = name.substr(0, name.find('.'));
@@ -94,10 +89,7 @@ int main(int argc, char** argv) {
   Mesh ref;
   MeshOptions mo;
   mo.elements_per_patch = ref_epp;
-  if (!BuildMesh(scene, mo, &ref, &err)) {
-    std::fprintf(stderr, "radiosity-waves: %s\n", err.c_str());
-    return 2;
-  }
+  BuildMeshOrDie("radiosity-waves", scene, mo, &ref);
   Solver ref_solver(ref, true);
   RunOptions ro;
   ro.epsilon = 1e-4;
