@@ -24,6 +24,7 @@
 #include <cstring>
 #include <functional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -41,18 +42,18 @@ struct Element {
   int patch = -1;                          // owning patch
   int parent = -1;                         // -1: made by BuildMesh
   int first_child = -1;                    // -1: a leaf (a receiver)
-  int level = 0;
+  uint8_t level = 0;                       // 0..12 (--max-level)
+  // Mesh::tverts holds T-vertices on its edges: few elements have any, so
+  // they are kept beside the elements, not in each (40 bytes, not 56).
+  bool tverts = false;
   // double, as are vertices, normals and offsets: a 1e4 sliver or a scene
   // at 1e-4 or 1e4 must keep its areas and planes; the solver divides by
   // areas (ρ/A) and sums B·A over 1e6 : 1e-6 light ranges.
   double area = 0.0;
-  // mid[k] >= 0: a finer neighbour put a vertex at the midpoint of edge
-  // v[k] -> v[k+1] (a T-vertex). Drawn as a corner of this element too, so
-  // that the hemicube sees no crack and shading no seam along the edge.
-  std::array<int, 4> mid{{-1, -1, -1, -1}};
   bool IsTriangle() const { return v[3] < 0; }
   bool IsLeaf() const { return first_child < 0; }
 };
+static_assert(sizeof(Element) == 40, "README, Memory: bytes per element");
 
 // Ids in one of the mesh's flat arrays, [first, last): a patch's top
 // elements, a surface's scene faces (Mesh::Tops, Mesh::SceneFaces).
@@ -140,6 +141,11 @@ struct Mesh {
   // first slot for its first piece; its other pieces are appended.
   std::vector<int32_t> patch_tops;
   std::vector<int32_t> face_scene;
+  // The T-vertices of the elements with Element::tverts: mids[k] >= 0 is a
+  // vertex a finer neighbour put at the midpoint of edge v[k] -> v[k+1],
+  // drawn as a corner of this element too, so that the hemicube sees no
+  // crack and shading no seam along the edge.
+  std::unordered_map<int32_t, std::array<int, 4>> tverts;
   double patch_size = 0.0;     // as used
   double scene_diagonal = 0.0; // bounding-box diagonal, the scene's scale
   // The corners of the input faces that joined into larger surfaces, for
@@ -193,6 +199,11 @@ struct Mesh {
   // Leaf elements under element `elem` (itself when it is a leaf).
   void LeavesUnder(int elem, std::vector<int>* out) const;
   const MeshFace& FaceOf(int elem) const { return faces[patches[elems[elem].patch].face]; }
+  // Element elem's T-vertices (Mesh::tverts), -1 where it has none.
+  std::array<int, 4> Mids(int elem) const {
+    if (!elems[size_t(elem)].tverts) return {{-1, -1, -1, -1}};
+    return tverts.at(elem);
+  }
   glm::dvec3 Centroid(int elem) const;
 };
 
@@ -258,10 +269,10 @@ constexpr uint64_t kNoEdge = ~uint64_t{0};
 // ConnectEdges().
 int MidpointOf(const Mesh& mesh, int a, int b);
 
-// The outline of element `e`: its corners and the T-vertices on its
+// The outline of element `elem`: its corners and the T-vertices on its
 // edges, counter-clockwise, from its first T-vertex if it has one (so a
 // fan from out[0] has no degenerate triangle). Returns the count, <= 8.
-int Outline(const Element& e, int out[8]);
+int Outline(const Mesh& mesh, int elem, int out[8]);
 
 // Leaf elements of the same face sharing a piece of an edge with leaf
 // `elem`: alike, finer (across a T-vertex) or coarser. Needs

@@ -278,10 +278,11 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   // Polygons counted first and reserved: grown by doubling they took up
   // to three times their 16 bytes an element while it grew.
   size_t npolys = 0;
-  for (const Element& el : mesh.elems) {
+  for (size_t e = 0; e < mesh.elems.size(); ++e) {
+    const Element& el = mesh.elems[e];
     if (!el.IsLeaf()) continue;
     int out[8];
-    const int m = Outline(el, out);
+    const int m = Outline(mesh, int(e), out);
     npolys += m == (el.IsTriangle() ? 3 : 4) ? 1 : size_t(m - 2);
   }
   s.polys.reserve(npolys);
@@ -291,7 +292,7 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
     // Drawn as a fan over its outline: where finer neighbours meet it,
     // it meets their edges exactly (no pixel cracks).
     int out[8];
-    const int m = Outline(el, out);
+    const int m = Outline(mesh, int(e), out);
     if (m == (el.IsTriangle() ? 3 : 4)) {
       s.polys.push_back(el.v);
     } else {
@@ -433,11 +434,12 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   auto color = [&](int v) { return is_t[group[v]] ? on_edge[group[v]] : s.colors[v]; };
   for (int e : t_leaves) {
     const Element& el = mesh.elems[e];
+    const std::array<int, 4> mids = mesh.Mids(e);
     const int n = el.IsTriangle() ? 3 : 4;
     for (int k = 0; k < n; ++k)
-      if (el.mid[k] >= 0) {
-        on_edge[group[el.mid[k]]] = 0.5f * (color(el.v[k]) + color(el.v[(k + 1) % n]));
-        is_t[group[el.mid[k]]] = 1;
+      if (mids[k] >= 0) {
+        on_edge[group[mids[k]]] = 0.5f * (color(el.v[k]) + color(el.v[(k + 1) % n]));
+        is_t[group[mids[k]]] = 1;
       }
   }
   for (size_t v = 0; v < s.colors.size(); ++v)
@@ -458,7 +460,7 @@ double Side(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& x, const
 glm::dvec3 Drawn(const Mesh& mesh, const ShadedMesh& shaded, int e, const glm::dvec3& x,
                  const glm::dvec3& n) {
   int out[8];
-  const int m = Outline(mesh.elems[e], out);
+  const int m = Outline(mesh, e, out);
   glm::dvec3 value(0.0);
   double best = -HUGE_VAL;
   for (int i = 1; i + 1 < m; ++i) {
