@@ -266,16 +266,14 @@ bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const M
   }
 
   if (read) read();
+  for (const Material& mat : scene.materials) mesh->materials.push_back({mat.kd, mat.ke});
   PointIds fv(&mesh->verts);
   for (const Surface& f : surfaces) {
-    const Material& mat = scene.materials[f.material];
     MeshFace mf;
     mf.scene_at = int32_t(mesh->face_scene.size());
     mf.scenes = int32_t(f.faces.size());
     mesh->face_scene.insert(mesh->face_scene.end(), f.faces.begin(), f.faces.end());
     mf.normal = f.normal;
-    mf.rho = mat.kd;
-    mf.emission = mat.ke;
     mf.material = f.material;
     mf.area = f.area;
     mf.offset = f.offset;

@@ -83,9 +83,7 @@ struct MeshFace {
   // scene_at + scenes) (Mesh::SceneFaces).
   int32_t scene_at = 0, scenes = 0;
   glm::dvec3 normal{0.0};
-  glm::dvec3 rho{0.0};           // Kd
-  glm::dvec3 emission{0.0};      // Ke
-  int material = 0;              // Scene::materials index
+  int material = 0;              // Scene::materials and Mesh::materials index
   double area = 0.0;
   double offset = 0.0;           // plane: dot(normal, x) == offset
   int vbegin = 0, vend = 0;      // its vertices: Mesh::verts[vbegin, vend)
@@ -141,6 +139,12 @@ struct Mesh {
   // first slot for its first piece; its other pieces are appended.
   std::vector<int32_t> patch_tops;
   std::vector<int32_t> face_scene;
+  // Per Scene::materials index: Kd and Ke, looked up through
+  // MeshFace::material (Rho, Emission) rather than 48 bytes in every face.
+  struct Material {
+    glm::dvec3 rho{0.0}, emission{0.0};
+  };
+  std::vector<Material> materials;
   // The T-vertices of the elements with Element::tverts: mids[k] >= 0 is a
   // vertex a finer neighbour put at the midpoint of edge v[k] -> v[k+1],
   // drawn as a corner of this element too, so that the hemicube sees no
@@ -199,6 +203,8 @@ struct Mesh {
   // Leaf elements under element `elem` (itself when it is a leaf).
   void LeavesUnder(int elem, std::vector<int>* out) const;
   const MeshFace& FaceOf(int elem) const { return faces[patches[elems[elem].patch].face]; }
+  const glm::dvec3& Rho(const MeshFace& f) const { return materials[size_t(f.material)].rho; }
+  const glm::dvec3& Emission(const MeshFace& f) const { return materials[size_t(f.material)].emission; }
   // Element elem's T-vertices (Mesh::tverts), -1 where it has none.
   std::array<int, 4> Mids(int elem) const {
     if (!elems[size_t(elem)].tverts) return {{-1, -1, -1, -1}};

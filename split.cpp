@@ -86,7 +86,7 @@ namespace {
 // A patch SplitPass may split: not an emitter, with pieces (SplitPieces;
 // not in a shooter group) into *tops.
 bool Splittable(const Mesh& m, int p, std::vector<int>* tops) {
-  const glm::dvec3& ke = m.faces[size_t(m.patches[size_t(p)].face)].emission;
+  const glm::dvec3& ke = m.Emission(m.faces[size_t(m.patches[size_t(p)].face)]);
   return !(ke.r + ke.g + ke.b > 0) && SplitPieces(m, p, tops) > 1;
 }
 
@@ -176,7 +176,7 @@ void Subdivider::Spread(const Mesh& mesh, const std::vector<float>& direct, size
     double sum = 0, area = 0;  // over every leaf not emitting
     for (size_t e = 0; e < mesh.elems.size(); ++e) {
       const Element& el = mesh.elems[e];
-      const glm::dvec3& ke = mesh.FaceOf(int(e)).emission;
+      const glm::dvec3& ke = mesh.Emission(mesh.FaceOf(int(e)));
       if (!el.IsLeaf() || ke.r + ke.g + ke.b > 0) continue;
       sum += double(direct[e]) * el.area;
       area += el.area;

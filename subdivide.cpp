@@ -48,7 +48,7 @@ Subdivider::Subdivider(Mesh* mesh, const SubdivideOptions& opts)
   // (paper §4.3: 20 to 50 shots; more lights, later), scaled to the scene.
   long emitters = 0;
   for (const Patch& p : mesh->patches) {
-    const glm::dvec3& ke = mesh->faces[p.face].emission;
+    const glm::dvec3& ke = mesh->Emission(mesh->faces[p.face]);
     if (ke.r + ke.g + ke.b > 0) ++emitters;
   }
   first_ = std::max(std::clamp(long(mesh->patches.size()) / 20, 20L, 50L), emitters);
@@ -72,7 +72,7 @@ void Subdivider::Track(const Mesh& mesh) {
   mark_.resize(n, 0);
   for (size_t e = from; e < n; ++e) {
     const Element& el = mesh.elems[e];
-    const glm::dvec3& ke = mesh.FaceOf(int(e)).emission;
+    const glm::dvec3& ke = mesh.Emission(mesh.FaceOf(int(e)));
     eligible_[e] = el.IsLeaf() ? kLeaf : 0;
     if (el.IsLeaf() && el.level < opts_.max_level && ShortestEdge(mesh, el) / 2 >= opts_.min_size)
       eligible_[e] |= kEligible;
@@ -112,7 +112,7 @@ double Subdivider::Factor(const Mesh& mesh, const std::vector<glm::dvec3>& b,
   std::vector<int>& nb = nb_;
   const Element& el = mesh.elems[size_t(e)];
   LeafNeighbours(mesh, e, &nb);
-  const double unsure = Lum(mesh.FaceOf(e).rho * ambient) + 0.2 * mean;
+  const double unsure = Lum(mesh.Rho(mesh.FaceOf(e)) * ambient) + 0.2 * mean;
   const glm::dvec3 c = mesh.Centroid(e);
   const double size = std::sqrt(el.area), be = Lum(b[size_t(e)]);
   const double se = synced_[size_t(e)], te = kDrift * std::abs(se);

@@ -125,7 +125,7 @@ TEST_P(GroupShot, KeepsEnergyExactly) {
   glm::dvec3 gain(0.0);
   for (const FormFactor& ff : col) {
     EXPECT_NE(m.group_of[m.elems[ff.elem].patch], m.group_of[p]) << "a member received";
-    gain += m.FaceOf(ff.elem).rho * xa * double(ff.f);
+    gain += m.Rho(m.FaceOf(ff.elem)) * xa * double(ff.f);
   }
   const glm::dvec3 before = unshot_power();
   solver.Shoot(p, col);

@@ -112,7 +112,7 @@ TEST(Split, SolverKeepsTheUnshotPower) {
     solver.Shoot(p, col);
   }
   int p = 0;
-  while (m.faces[m.patches[p].face].emission != glm::dvec3(0) ||
+  while (m.Emission(m.faces[m.patches[p].face]) != glm::dvec3(0) ||
          solver.unshot()[p].r == 0)
     ++p;
   const glm::dvec3 before(Sum(solver.unshot(), m, 0), Sum(solver.unshot(), m, 1),

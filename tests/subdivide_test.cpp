@@ -215,7 +215,7 @@ TEST(Solver, ShootsColumnsOfAnOlderHierarchy) {
   std::vector<int> leaves;
   for (const FormFactor& f : col) {
     const Element& e = m.elems[f.elem];
-    const double rho = m.FaceOf(f.elem).rho.r;
+    const double rho = m.Rho(m.FaceOf(f.elem)).r;
     want += rho * 4 * f.f * m.patches[p].area;
     m.LeavesUnder(f.elem, &leaves);
     for (int l : leaves) {
@@ -238,7 +238,7 @@ TEST(Solver, NewWaveStartsFromTheEmitters) {
   solver.NewWave();
   EXPECT_EQ(solver.UnshotFraction(), 1.0);
   for (size_t e = 0; e < lit.mesh.elems.size(); ++e)
-    EXPECT_EQ(solver.radiosity()[e], lit.mesh.FaceOf(int(e)).emission);
+    EXPECT_EQ(solver.radiosity()[e], lit.mesh.Emission(lit.mesh.FaceOf(int(e))));
   for (size_t p = 0; p < lit.mesh.patches.size(); ++p) EXPECT_EQ(solver.TimesShot(int(p)), 0);
 }
 
