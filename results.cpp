@@ -9,6 +9,7 @@
 #include <cstring>
 #include <cstdlib>
 #include <sstream>
+#include <unordered_map>
 
 #include "check.h"
 #include "files.h"
@@ -326,8 +327,10 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
            size_t(normal_key(v, 0) ^ normal_key(v, 1) ^ normal_key(v, 2)) ^
            size_t(mesh.faces[face_of[v]].material) * 101;
   };
+  // At most 3/4 full (the pair of 4-byte tables at the joining, face_of
+  // and this, was the peak of the master's last picture at half full).
   size_t slots = 16;
-  while (slots < 2 * mesh.verts.size()) slots *= 2;
+  while (3 * slots < 4 * mesh.verts.size()) slots *= 2;
   std::vector<int> first(slots, -1);  // a group's first vertex
   std::vector<int> group(mesh.verts.size());
   int groups = 0;
@@ -350,15 +353,21 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   // Most groups are one vertex, whose sums are its own (0 + x is x): sums
   // per group only for those joined (a group's members, then the index of
   // its sums or -1), and their members' own sums kept (`at`, in vertex
-  // order) until the groups' are summed.
+  // order) until the groups' are summed; each member's group sums index
+  // (`sums_of`) kept instead of the per-group table, freed before the
+  // colours are made.
   std::vector<int> joined(static_cast<size_t>(groups), 0);
   for (int g : group) ++joined[g];
   size_t njoined = 0;
   for (int& j : joined) j = j > 1 ? int(njoined++) : -1;
-  std::vector<int> at(mesh.verts.size(), -1);
-  size_t nmembers = 0;
+  std::vector<int> at(mesh.verts.size(), -1), sums_of;
   for (size_t v = 0; v < at.size(); ++v)
-    if (joined[group[v]] >= 0) at[v] = int(nmembers++);
+    if (joined[group[v]] >= 0) {
+      at[v] = int(sums_of.size());
+      sums_of.push_back(joined[group[v]]);
+    }
+  std::vector<int>().swap(joined);
+  const size_t nmembers = sums_of.size();
   std::vector<glm::dvec3> msum(nmembers, glm::dvec3(0.0));
   std::vector<double> mw(nmembers, 0.0);
   // Each vertex's area-weighted sum over the leaves around it, a face at a
@@ -410,40 +419,43 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   std::vector<double> gw(njoined, 0.0);
   for (size_t v = 0; v < at.size(); ++v)
     if (at[v] >= 0) {
-      const int j = joined[group[v]];
+      const int j = sums_of[size_t(at[v])];
       gsum[j] += msum[size_t(at[v])];
       gw[j] += mw[size_t(at[v])];
     }
   for (size_t v = 0; v < at.size(); ++v)
     if (at[v] >= 0) {
-      const int j = joined[group[v]];
+      const int j = sums_of[size_t(at[v])];
       if (gw[j] > 0) s.colors[v] = glm::vec3(gsum[j] / gw[j]);
     }
   for (auto* x : {&sum, &gsum, &msum}) std::vector<glm::dvec3>().swap(*x);
   for (auto* x : {&w, &gw, &mw}) std::vector<double>().swap(*x);
-  std::vector<int>().swap(joined);
-  std::vector<int>().swap(at);
+  for (auto* x : {&at, &sums_of}) std::vector<int>().swap(*x);
   // A T-vertex takes the value interpolated along the coarser edge it lies
   // on, so both sides shade that edge alike (no seam); so do the vertices
   // joined with it across coplanar faces. Coarser first: a corner of a
   // finer element may itself be a T-vertex of a coarser one.
   std::stable_sort(t_leaves.begin(), t_leaves.end(),
                    [&](int a, int b) { return mesh.elems[a].level < mesh.elems[b].level; });
-  std::vector<glm::vec3> on_edge(static_cast<size_t>(groups));
-  std::vector<char> is_t(static_cast<size_t>(groups), 0);
-  auto color = [&](int v) { return is_t[group[v]] ? on_edge[group[v]] : s.colors[v]; };
+  // By group, the T-vertices' only: few, so not an array over all groups
+  // (13 bytes a vertex, the peak of the master's last picture).
+  std::unordered_map<int, glm::vec3> on_edge;
+  auto color = [&](int v) {
+    const auto it = on_edge.find(group[v]);
+    return it != on_edge.end() ? it->second : s.colors[v];
+  };
   for (int e : t_leaves) {
     const Element& el = mesh.elems[e];
     const std::array<int, 4> mids = mesh.Mids(e);
     const int n = el.IsTriangle() ? 3 : 4;
     for (int k = 0; k < n; ++k)
       if (mids[k] >= 0) {
-        on_edge[group[mids[k]]] = 0.5f * (color(el.v[k]) + color(el.v[(k + 1) % n]));
-        is_t[group[mids[k]]] = 1;
+        const glm::vec3 c = 0.5f * (color(el.v[k]) + color(el.v[(k + 1) % n]));
+        on_edge[group[mids[k]]] = c;
       }
   }
-  for (size_t v = 0; v < s.colors.size(); ++v)
-    if (is_t[group[v]]) s.colors[v] = on_edge[group[v]];
+  for (size_t v = 0; v < s.colors.size() && !on_edge.empty(); ++v)
+    if (const auto it = on_edge.find(group[v]); it != on_edge.end()) s.colors[v] = it->second;
   return s;
 }
 
