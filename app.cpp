@@ -213,6 +213,13 @@ void MasterRun::Build() {
   // A closed terminal or ssh session (SIGHUP) stops the run as Ctrl-C does.
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, OnSignal);
   run_.stop = &g_stop;
+  // The workers first: the scene frame is made from the scene's vertices,
+  // which are freed before the solver and subdivision's adjacency are
+  // made (with them beside, that was the master's peak).
+  built_ = mesh_.LeafCount();
+  StartWorkers();
+  DropVertices(&scene_);  // hashed, sent and meshed: 120 bytes a face freed
+  malloc_trim(0);         // and given back to the system (glibc would keep them)
   solver_ = std::make_unique<Solver>(mesh_, run_.overshoot);
   // Progress: a line redrawn in place on a terminal, else a line every 2 s
   // (a log file or a batch system's output should not fill with \r).
@@ -239,11 +246,7 @@ void MasterRun::Build() {
     sub.max_elements = sub_limit_;
     subdivider_ = std::make_unique<Subdivider>(&mesh_, sub);
   }
-  built_ = mesh_.LeafCount();
-  StartWorkers();
   if (!opts_.resume_file.empty()) Resume();
-  DropVertices(&scene_);  // hashed, sent and meshed: 120 bytes a face freed
-  malloc_trim(0);         // and given back to the system (glibc would keep them)
   if (!opts_.checkpoint_file.empty()) {
     run_.checkpoint_every = opts_.checkpoint_every;
     run_.checkpoint = [this](const RunState& state) { SaveCheckpoint(state); };
