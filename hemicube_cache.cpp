@@ -57,7 +57,7 @@ void Hemicube::BuildCache(const Mesh& mesh) {
     cf.normal = mf.normal;
     cf.offset = mf.offset;
     cf.lb = int(elem_.size());
-    for (int p : mf.patches) {
+    for (int p : mesh.FacePatches(mf)) {
       mesh.Leaves(p, &leaves);
       elem_.insert(elem_.end(), leaves.begin(), leaves.end());
     }

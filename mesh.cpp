@@ -93,11 +93,11 @@ struct Builder {
     auto it = patch_of.find(key);
     if (it != patch_of.end()) return it->second;
     int id = int(m->patches.size());
-    if (first_patch < 0) first_patch = id;
+    if (first_patch < 0) first_patch = m->faces[face].patch_at = id;
+    ++m->faces[face].built;
     tops.emplace_back();
     m->patches.emplace_back();
     m->patches.back().face = face;
-    m->faces[face].patches.push_back(id);
     patch_of.emplace(key, id);
     return id;
   }

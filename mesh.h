@@ -72,6 +72,7 @@ struct Patch {
   // (a range of one flat array rather than a vector a patch and its heap
   // block: 48 bytes a patch less).
   int32_t tops_at = 0, tops = 0;
+  int32_t next_piece = -1;       // the face's next patch SplitPatch appended, or -1
   double area = 0.0;
   glm::dvec3 center{0.0};        // area centroid: where the hemicube sits
 };
@@ -82,13 +83,49 @@ struct MeshFace {
   // The Scene::faces it covers, ascending: Mesh::face_scene[scene_at,
   // scene_at + scenes) (Mesh::SceneFaces).
   int32_t scene_at = 0, scenes = 0;
-  glm::dvec3 normal{0.0};
   int material = 0;              // Scene::materials and Mesh::materials index
+  int vbegin = 0, vend = 0;      // its vertices: Mesh::verts[vbegin, vend)
+  // Its patches (Mesh::FacePatches): BuildMesh's, Mesh::patches[patch_at,
+  // patch_at + built), then those SplitPatch appended, first_piece to
+  // last_piece by Patch::next_piece (not a vector a face and its heap
+  // block: 40 bytes a face less).
+  int32_t patch_at = 0, built = 0, first_piece = -1, last_piece = -1;
+  glm::dvec3 normal{0.0};
   double area = 0.0;
   double offset = 0.0;           // plane: dot(normal, x) == offset
-  int vbegin = 0, vend = 0;      // its vertices: Mesh::verts[vbegin, vend)
-  std::vector<int> divide_verts; // and those Divide() added since
-  std::vector<int> patches;
+  std::vector<int> divide_verts; // the vertices Divide() added since
+};
+
+// A face's patches in order, BuildMesh's then SplitPatch's pieces:
+// for (int p : mesh.FacePatches(face)).
+struct FacePatchIds {
+  const std::vector<Patch>* patches;
+  int32_t first, built_end, first_piece;
+  struct Iterator {
+    const FacePatchIds* ids;
+    int32_t p;
+    int operator*() const { return p; }
+    Iterator& operator++() {
+      p = p + 1 < ids->built_end ? p + 1
+          : p < ids->built_end   ? ids->first_piece
+                                 : (*ids->patches)[size_t(p)].next_piece;
+      return *this;
+    }
+    bool operator!=(const Iterator& o) const { return p != o.p; }
+  };
+  Iterator begin() const { return {this, first < built_end ? first : first_piece}; }
+  Iterator end() const { return {this, -1}; }
+  // Walks the pieces: a face has few.
+  size_t size() const {
+    size_t n = 0;
+    for (Iterator i = begin(); i != end(); ++i) ++n;
+    return n;
+  }
+  int operator[](size_t k) const {
+    Iterator i = begin();
+    while (k-- > 0) ++i;
+    return *i;
+  }
 };
 
 // Hash of a point by value (glm's == compares by value), for joining
@@ -194,6 +231,9 @@ struct Mesh {
   IdSpan Tops(int patch) const {
     const Patch& p = patches[size_t(patch)];
     return {patch_tops.data() + p.tops_at, patch_tops.data() + p.tops_at + p.tops};
+  }
+  FacePatchIds FacePatches(const MeshFace& f) const {
+    return {&patches, f.patch_at, f.patch_at + f.built, f.first_piece};
   }
   IdSpan SceneFaces(const MeshFace& f) const {
     return {face_scene.data() + f.scene_at, face_scene.data() + f.scene_at + f.scenes};

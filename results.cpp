@@ -49,7 +49,7 @@ std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::d
     if (scene_faces.size() == 1) {  // all its leaves, in patch order
       glm::dvec3 sum(0.0);
       double area = 0;
-      for (int p : mf.patches) {
+      for (int p : mesh.FacePatches(mf)) {
         mesh.Leaves(p, &leaves);
         for (int e : leaves) {
           sum += elem_b[e] * mesh.elems[e].area;
@@ -67,7 +67,7 @@ std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::d
       glm::dvec2 lo, hi;
     };
     std::vector<Top> tops;
-    for (int p : mf.patches)
+    for (int p : mesh.FacePatches(mf))
       for (int e : mesh.Tops(p)) {
         const Element& el = mesh.elems[e];
         Top t{e, glm::dvec2(HUGE_VAL), glm::dvec2(-HUGE_VAL)};
@@ -380,7 +380,7 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   std::vector<double> w;
   for (const MeshFace& f : mesh.faces) {
     leaves.clear();
-    for (int p : f.patches) {
+    for (int p : mesh.FacePatches(f)) {
       mesh.Leaves(p, &under);
       leaves.insert(leaves.end(), under.begin(), under.end());
     }
@@ -514,10 +514,12 @@ void FieldError(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const M
     // same face here (patches may have been split, in either mesh).
     const MeshFace& face = mesh.faces[size_t(ref.patches[rel.patch].face)];
     int e = -1;
-    for (size_t i = 0; i < face.patches.size() && e < 0; ++i)
-      for (int top : mesh.Tops(face.patches[i]))
+    for (int p : mesh.FacePatches(face)) {
+      for (int top : mesh.Tops(p))
         if (inside(top, x, n)) { e = top; break; }
-    if (e < 0) e = mesh.Tops(face.patches[0])[0];  // rounding at an edge
+      if (e >= 0) break;
+    }
+    if (e < 0) e = mesh.Tops(mesh.FacePatches(face)[0])[0];  // rounding at an edge
     while (!mesh.elems[e].IsLeaf()) {
       int next = mesh.elems[e].first_child;
       for (int k = 0; k < kChildren; ++k)

@@ -55,7 +55,10 @@ void SplitPatch(Mesh* mesh, int patch) {
     const int id = i == 0 ? patch : int(mesh->patches.size());
     if (i > 0) {
       mesh->patches.emplace_back();
-      mesh->faces[size_t(face)].patches.push_back(id);
+      MeshFace& f = mesh->faces[size_t(face)];
+      if (f.last_piece < 0) f.first_piece = id;
+      else mesh->patches[size_t(f.last_piece)].next_piece = id;
+      f.last_piece = id;
       if (!mesh->group_of.empty()) mesh->group_of.push_back(-1);
     }
     // As BuildMesh makes a patch: its top elements' areas and centroids.
