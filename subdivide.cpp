@@ -43,7 +43,6 @@ Subdivider::Subdivider(Mesh* mesh, const SubdivideOptions& opts)
   CHECK(opts_.between >= 10 && opts_.floor > 0 && opts_.threshold >= opts_.floor);
   CHECK(opts_.split_floor > 0 && opts_.split_threshold >= opts_.split_floor);
   if (!(opts_.min_size > 0)) opts_.min_size = mesh->scene_diagonal / 400;
-  ConnectEdges(mesh);
   // The radiosity is worth dividing by once every light source has shot
   // (paper §4.3: 20 to 50 shots; more lights, later), scaled to the scene.
   long emitters = 0;

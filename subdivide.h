@@ -125,7 +125,6 @@ struct SubdividerState {
 
 class Subdivider {
  public:
-  // Connects the mesh's edges (ConnectEdges) for the neighbour search.
   Subdivider(Mesh* mesh, const SubdivideOptions& opts);
 
   // Whether a pass is due after `shots` shots of the current wave: not
@@ -159,7 +158,8 @@ class Subdivider {
   // scene is still summed over every leaf (8 bytes each, in order: the
   // same sum). A moved leaf costs two neighbour searches (itself, its
   // neighbours): when over a quarter moved, the pass evaluates every leaf
-  // instead.
+  // instead. Needs the mesh's edges connected (ConnectEdges) for the
+  // neighbour search.
   std::vector<int32_t> Pass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
                             const std::vector<double>& noise, const glm::dvec3& ambient,
                             long shots, const std::vector<int32_t>& changed);
