@@ -20,8 +20,10 @@ constexpr double kNoiseSigmas = 3.5;
 // and by looser bounds respectively).
 constexpr double kDrift = 1.0 / 16;
 
-// Subdivider::eligible_'s bits.
-constexpr uint8_t kLeaf = 1, kEligible = 2;
+// Subdivider::eligible_'s bits: a leaf; one that may be divided; one the
+// lit scene's mean counts (a leaf that does not emit; its area is read
+// from the mesh, not kept: 8 bytes an element).
+constexpr uint8_t kLeaf = 1, kEligible = 2, kLit = 4;
 
 // x rounded up to a float.
 float Up(double x) {
@@ -64,7 +66,6 @@ bool Subdivider::Due(long shots) const {
 void Subdivider::Track(const Mesh& mesh) {
   const size_t from = eligible_.size(), n = mesh.elems.size();
   eligible_.resize(n);
-  mean_area_.resize(n);
   synced_.resize(n, NAN);
   bound_.resize(n, 0);
   at_pass_.resize(n, -1);
@@ -75,11 +76,8 @@ void Subdivider::Track(const Mesh& mesh) {
     eligible_[e] = el.IsLeaf() ? kLeaf : 0;
     if (el.IsLeaf() && el.level < opts_.max_level && ShortestEdge(mesh, el) / 2 >= opts_.min_size)
       eligible_[e] |= kEligible;
-    mean_area_[e] = el.IsLeaf() && !(ke.r + ke.g + ke.b > 0) ? el.area : -1;
-    if (el.parent >= 0 && size_t(el.parent) < from) {
-      eligible_[size_t(el.parent)] = 0;
-      mean_area_[size_t(el.parent)] = -1;
-    }
+    if (el.IsLeaf() && !(ke.r + ke.g + ke.b > 0)) eligible_[e] |= kLit;
+    if (el.parent >= 0 && size_t(el.parent) < from) eligible_[size_t(el.parent)] = 0;
   }
 }
 
@@ -170,9 +168,10 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::d
   double sum = 0, area = 0;  // the lit scene's mean: the absolute part of the scale
   for (size_t e = 0; e < n; ++e) {
     if (scan && eligible_[e] & kLeaf) sync(e);
-    if (mean_area_[e] < 0) continue;
-    sum += Lum(b[e]) * mean_area_[e];
-    area += mean_area_[e];
+    if (!(eligible_[e] & kLit)) continue;
+    const double a = mesh.elems[e].area;
+    sum += Lum(b[e]) * a;
+    area += a;
   }
   const double mean = area > 0 ? sum / area : 0;
 
