@@ -480,7 +480,7 @@ void MasterRun::WriteOutputs() {
 
   // Nothing is shot or divided after the run: of the solver the outputs
   // read only B (moved out, not copied beside it), and of subdivision
-  // whether it was capped; the rest (some 60 and 20 bytes an element) is
+  // whether it was capped; the rest (some 60 and 14 bytes an element) is
   // freed before the pictures, the peak of the master's end.
   const std::vector<glm::dvec3> b = solver_->TakeRadiosity();
   const bool capped = subdivider_ && subdivider_->capped();

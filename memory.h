@@ -14,7 +14,7 @@
 // or the scene frame (with workers), the pictures at the end of a wave
 // (measured 362 with -j 0, 302 with -j 1, at 1.06 M elements and 2 shots;
 // about 13% room for scenes that mesh less evenly). A run that divides
-// peaks higher (README, Memory: 525 with -j 0 at its first wave's end).
+// peaks higher (README, Memory: 529 with -j 0 at its first wave's end).
 constexpr double kMasterBytesPerElement = 410;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
 // (measured 250).
