@@ -213,6 +213,13 @@ void MasterRun::Build() {
   // A closed terminal or ssh session (SIGHUP) stops the run as Ctrl-C does.
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, OnSignal);
   run_.stop = &g_stop;
+  // The workers first: the scene frame is made from the scene's vertices,
+  // which are freed before the solver and subdivision's adjacency are
+  // made (with them beside, that was the master's peak).
+  built_ = mesh_.LeafCount();
+  StartWorkers();
+  DropVertices(&scene_);  // hashed, sent and meshed: 120 bytes a face freed
+  malloc_trim(0);         // and given back to the system (glibc would keep them)
   solver_ = std::make_unique<Solver>(mesh_, run_.overshoot);
   // Progress: a line redrawn in place on a terminal, else a line every 2 s
   // (a log file or a batch system's output should not fill with \r).
@@ -223,7 +230,7 @@ void MasterRun::Build() {
   if (solver_->Dark())  // a legal scene, but most likely a missing Ke
     Say("warning: " + opts_.scene_path + ": no face emits light (Ke); every B is 0");
   run_.wave_end = [this](int wave) {
-    auto shaded = Picture({FrameName(wave)});
+    auto shaded = Picture(solver_->radiosity(), {FrameName(wave)});
     // The view shows the wave's end, and nothing of the next wave until
     // it is as far (a new wave starts again from the lights): the picture
     // never goes back to a less converged one.
@@ -239,11 +246,7 @@ void MasterRun::Build() {
     sub.max_elements = sub_limit_;
     subdivider_ = std::make_unique<Subdivider>(&mesh_, sub);
   }
-  built_ = mesh_.LeafCount();
-  StartWorkers();
   if (!opts_.resume_file.empty()) Resume();
-  DropVertices(&scene_);  // hashed, sent and meshed: 120 bytes a face freed
-  malloc_trim(0);         // and given back to the system (glibc would keep them)
   if (!opts_.checkpoint_file.empty()) {
     run_.checkpoint_every = opts_.checkpoint_every;
     run_.checkpoint = [this](const RunState& state) { SaveCheckpoint(state); };
@@ -415,10 +418,11 @@ std::string MasterRun::FrameName(int wave) const {
 // The last wave's frame and final.png are the same picture: shaded and
 // rendered once (on a 200,000-face scene each costs seconds). HDR_PATH:
 // also the linear picture there, as Radiance RGBE.
-std::pair<ShadedMesh, float> MasterRun::Picture(const std::vector<std::string>& paths,
+std::pair<ShadedMesh, float> MasterRun::Picture(const std::vector<glm::dvec3>& b,
+                                                const std::vector<std::string>& paths,
                                                 const std::string& hdr_path) {
   std::string err;
-  ShadedMesh shaded = Shade(mesh_, solver_->radiosity());
+  ShadedMesh shaded = Shade(mesh_, b);
   Image img;
   Render(shaded, camera_, opts_.width, opts_.height, &img);
   const float exposure = AutoExposure(shaded);
@@ -474,9 +478,17 @@ void MasterRun::WriteOutputs() {
                           "; no results written");
   }
 
-  const std::vector<glm::dvec3> face_b = FaceRadiosity(mesh_, solver_->radiosity());
+  // Nothing is shot or divided after the run: of the solver the outputs
+  // read only B (moved out, not copied beside it), and of subdivision
+  // whether it was capped; the rest (some 60 and 14 bytes an element) is
+  // freed before the pictures, the peak of the master's end.
+  const std::vector<glm::dvec3> b = solver_->TakeRadiosity();
+  const bool capped = subdivider_ && subdivider_->capped();
+  solver_.reset();
+  subdivider_.reset();
+  const std::vector<glm::dvec3> face_b = FaceRadiosity(mesh_, b);
   if (!WriteResultCsv(staging_.Path("result.csv"), scene_, face_b, &err)) Die(kExitFailure, err);
-  const auto shaded = Picture({FrameName(r.waves), staging_.Path("final." + opts_.format)},
+  const auto shaded = Picture(b, {FrameName(r.waves), staging_.Path("final." + opts_.format)},
                               staging_.Path("final.hdr"));
   if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", r.waves, mesh_.LeafCount());
@@ -524,7 +536,7 @@ void MasterRun::WriteOutputs() {
   }
   commit();
 
-  if (subdivider_ && subdivider_->capped())
+  if (capped)
     std::fprintf(stderr, "radiosity: warning: subdivision stopped at %ld elements: the next "
                          "pass would pass the limit of %ld\n", long(mesh_.elems.size()), sub_limit_);
   if (r.status == RunStatus::kLimit)  // said even with -q: these are not converged numbers

@@ -61,9 +61,10 @@ class MasterRun {
   void OnSample(const Sample& s);
   void Note(const std::string& line, bool warning);
   std::string FrameName(int wave) const;
-  // Renders the solution once and writes it to every path (and to
-  // hdr_path as Radiance RGBE, if given).
-  std::pair<ShadedMesh, float> Picture(const std::vector<std::string>& paths,
+  // Renders the solution `b` (per element) once and writes it to every
+  // path (and to hdr_path as Radiance RGBE, if given).
+  std::pair<ShadedMesh, float> Picture(const std::vector<glm::dvec3>& b,
+                                       const std::vector<std::string>& paths,
                                        const std::string& hdr_path = "");
   void SaveCheckpoint(const RunState& state);
   ViewInfo ViewOf() const;  // what the browser view shows of this run

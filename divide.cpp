@@ -143,10 +143,17 @@ void Border(Mesh* m, int elem, bool add) {
   if (!add) bits = 0;
 }
 
+// Element elem's edge k becomes home to T-vertex v.
+void PutMid(Mesh* m, int elem, int k, int v) {
+  m->tverts.try_emplace(elem, std::array<int, 4>{{-1, -1, -1, -1}}).first->second[k] = v;
+  m->elems[elem].tverts = true;
+}
+
 // Element n's edge (p, q) (its own vertex ids) becomes home to T-vertex v.
-void SetMid(Element* n, int p, int q, int v) {
-  for (int k = 0, c = Corners(*n); k < c; ++k)
-    if (n->v[k] == p && n->v[Next(k, c)] == q) n->mid[k] = v;
+void SetMid(Mesh* m, int n, int p, int q, int v) {
+  const Element& e = m->elems[n];
+  for (int k = 0, c = Corners(e); k < c; ++k)
+    if (e.v[k] == p && e.v[Next(k, c)] == q) PutMid(m, n, k, v);
 }
 
 // A vertex Divide() makes: on an edge (a, b), or a quad's centre (a < 0).
@@ -168,7 +175,7 @@ int Midpoint(Mesh* m, int face, int a, int b) {
   const glm::dvec3 p = EdgePoint(m->verts[a], m->verts[b], 1, 2);
   const int v = AddVertex(m, face, a, b, p);
   if (int n = Owner(*m, b, a); n >= 0) {
-    SetMid(&m->elems[n], b, a, v);
+    SetMid(m, n, b, a, v);
     return v;
   }
   // Copies: AddVertex() below grows (and may move) m->verts.
@@ -176,14 +183,15 @@ int Midpoint(Mesh* m, int face, int a, int b) {
   std::vector<int> along;
   BorderFind(*m, pa, pb, &along);
   for (int n : along) {
-    Element& ne = m->elems[n];
+    const Element& ne = m->elems[n];
     const int nf = m->patches[ne.patch].face;
     if (nf == face || !ne.IsLeaf()) continue;
+    const std::array<int, 4> mids = m->Mids(n);
     for (int k = 0, c = Corners(ne); k < c; ++k) {
       const int x = ne.v[k], y = ne.v[Next(k, c)];
       const glm::dvec3 px = m->verts[x], py = m->verts[y];
-      if (ne.mid[k] >= 0 || !((px == pa && py == pb) || (px == pb && py == pa))) continue;
-      ne.mid[k] = AddVertex(m, nf, x, y, p);
+      if (mids[k] >= 0 || !((px == pa && py == pb) || (px == pb && py == pa))) continue;
+      PutMid(m, n, k, AddVertex(m, nf, x, y, p));
     }
   }
   return v;
@@ -198,7 +206,7 @@ int MidpointOf(const Mesh& m, int a, int b) {
     if (e < 0) continue;
     const Element& el = m.elems[e];
     if (el.IsLeaf()) {
-      if (el.mid[k] >= 0) return el.mid[k];
+      if (const int v = m.Mids(e)[k]; v >= 0) return v;
       continue;
     }
     // The children as Divide() lays them out: child 0 starts v[0], mid[0]
@@ -283,21 +291,27 @@ void Divide(Mesh* mesh, int32_t elem) {
     // corner c (as kids lays them out), so its edges c - 1 and c; the
     // others lie inside the parent (on its new centre, or between two of
     // its sides' midpoints), where nothing but the children has an edge.
+    int mids[4] = {-1, -1, -1, -1};
     for (int k = 0; k < n; ++k)
-      if (c < n && (k == c || Next(k, n) == c)) child.mid[k] = MidpointOf(*mesh, kv[k], kv[Next(k, n)]);
+      if (c < n && (k == c || Next(k, n) == c)) mids[k] = MidpointOf(*mesh, kv[k], kv[Next(k, n)]);
+    const int id = int(mesh->elems.size());
     mesh->elems.push_back(child);
-    Link(mesh, int(mesh->elems.size()) - 1);
+    for (int k = 0; k < n; ++k)
+      if (mids[k] >= 0) PutMid(mesh, id, k, mids[k]);
+    Link(mesh, id);
   }
   for (int k = 0; k < kChildren; ++k) Border(mesh, first + k, true);
 }
 
-int Outline(const Element& e, int out[8]) {
+int Outline(const Mesh& mesh, int elem, int out[8]) {
+  const Element& e = mesh.elems[elem];
+  const std::array<int, 4> mids = mesh.Mids(elem);
   int ids[8], n = 0, from = -1;
   for (int k = 0; k < Corners(e); ++k) {
     ids[n++] = e.v[k];
-    if (e.mid[k] < 0) continue;
+    if (mids[k] < 0) continue;
     if (from < 0) from = n;
-    ids[n++] = e.mid[k];
+    ids[n++] = mids[k];
   }
   if (from < 0) from = 0;
   for (int i = 0; i < n; ++i) out[i] = ids[(from + i) % n];
@@ -307,6 +321,7 @@ int Outline(const Element& e, int out[8]) {
 void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out) {
   out->clear();
   const Element& e = mesh.elems[elem];
+  const std::array<int, 4> mids = mesh.Mids(elem);
   auto add = [&](int a, int b) {
     const int n = Owner(mesh, a, b);
     if (n >= 0 && std::find(out->begin(), out->end(), n) == out->end()) out->push_back(n);
@@ -315,9 +330,9 @@ void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out) {
   for (int k = 0, c = Corners(e); k < c; ++k) {
     const int p = e.v[k], q = e.v[Next(k, c)];
     if (add(q, p)) continue;               // alike
-    if (e.mid[k] >= 0) {                   // finer, across a T-vertex
-      add(q, e.mid[k]);
-      add(e.mid[k], p);
+    if (mids[k] >= 0) {                    // finer, across a T-vertex
+      add(q, mids[k]);
+      add(mids[k], p);
       continue;
     }
     // Coarser: p -> q is half of the neighbour's edge, split at p or q.

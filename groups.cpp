@@ -131,7 +131,7 @@ class Grouper {
     for (size_t p = 0; p < info_.size(); ++p) {
       PatchInfo& in = info_[p];
       // Emitters shoot alone: their direct light is most of the answer.
-      const glm::dvec3& ke = m_.faces[m_.patches[p].face].emission;
+      const glm::dvec3& ke = m_.Emission(m_.faces[m_.patches[p].face]);
       if (ke.r != 0 || ke.g != 0 || ke.b != 0) continue;
       // Small patches only: a patch of about the patch size already is the
       // mesh's unit of where light leaves from, and a group of those would

@@ -57,7 +57,7 @@ void Hemicube::BuildCache(const Mesh& mesh) {
     cf.normal = mf.normal;
     cf.offset = mf.offset;
     cf.lb = int(elem_.size());
-    for (int p : mf.patches) {
+    for (int p : mesh.FacePatches(mf)) {
       mesh.Leaves(p, &leaves);
       elem_.insert(elem_.end(), leaves.begin(), leaves.end());
     }
@@ -107,7 +107,7 @@ void Hemicube::BuildCache(const Mesh& mesh) {
     cf.pb = int(outline_at_.size()) - 1;
     for (int r = cf.lb; r < cf.le; ++r) {
       int vid[8];
-      const int nv = Outline(mesh.elems[elem_[r]], vid);
+      const int nv = Outline(mesh, elem_[r], vid);
       for (int i = 0; i < nv; ++i) {
         CHECK(rel[vid[i]] >= 0);  // a vertex of this face
         outline_.push_back(rel[vid[i]]);

@@ -12,12 +12,13 @@
 
 // The master: mesh, solver, subdivision's adjacency, the hemicube (-j 0)
 // or the scene frame (with workers), the pictures at the end of a wave
-// (measured 413 with -j 0, 367 with -j 1, at 1.06 M elements; room left
-// for a few bytes an element more and for scenes that mesh less evenly).
-constexpr double kMasterBytesPerElement = 470;
+// (measured 362 with -j 0, 302 with -j 1, at 1.06 M elements and 2 shots;
+// about 13% room for scenes that mesh less evenly). A run that divides
+// peaks higher (README, Memory: 529 with -j 0 at its first wave's end).
+constexpr double kMasterBytesPerElement = 410;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
-// (measured 288).
-constexpr double kWorkerBytesPerElement = 330;
+// (measured 250).
+constexpr double kWorkerBytesPerElement = 285;
 
 // Bytes this process may still use: physical memory, or less where
 // ulimit -v / -d or a cgroup's memory.max says so.

@@ -93,11 +93,11 @@ struct Builder {
     auto it = patch_of.find(key);
     if (it != patch_of.end()) return it->second;
     int id = int(m->patches.size());
-    if (first_patch < 0) first_patch = id;
+    if (first_patch < 0) first_patch = m->faces[face].patch_at = id;
+    ++m->faces[face].built;
     tops.emplace_back();
     m->patches.emplace_back();
     m->patches.back().face = face;
-    m->faces[face].patches.push_back(id);
     patch_of.emplace(key, id);
     return id;
   }
@@ -266,16 +266,14 @@ bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const M
   }
 
   if (read) read();
+  for (const Material& mat : scene.materials) mesh->materials.push_back({mat.kd, mat.ke});
   PointIds fv(&mesh->verts);
   for (const Surface& f : surfaces) {
-    const Material& mat = scene.materials[f.material];
     MeshFace mf;
     mf.scene_at = int32_t(mesh->face_scene.size());
     mf.scenes = int32_t(f.faces.size());
     mesh->face_scene.insert(mesh->face_scene.end(), f.faces.begin(), f.faces.end());
     mf.normal = f.normal;
-    mf.rho = mat.kd;
-    mf.emission = mat.ke;
     mf.material = f.material;
     mf.area = f.area;
     mf.offset = f.offset;

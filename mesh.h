@@ -24,6 +24,7 @@
 #include <cstring>
 #include <functional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -41,18 +42,18 @@ struct Element {
   int patch = -1;                          // owning patch
   int parent = -1;                         // -1: made by BuildMesh
   int first_child = -1;                    // -1: a leaf (a receiver)
-  int level = 0;
+  uint8_t level = 0;                       // 0..12 (--max-level)
+  // Mesh::tverts holds T-vertices on its edges: few elements have any, so
+  // they are kept beside the elements, not in each (40 bytes, not 56).
+  bool tverts = false;
   // double, as are vertices, normals and offsets: a 1e4 sliver or a scene
   // at 1e-4 or 1e4 must keep its areas and planes; the solver divides by
   // areas (ρ/A) and sums B·A over 1e6 : 1e-6 light ranges.
   double area = 0.0;
-  // mid[k] >= 0: a finer neighbour put a vertex at the midpoint of edge
-  // v[k] -> v[k+1] (a T-vertex). Drawn as a corner of this element too, so
-  // that the hemicube sees no crack and shading no seam along the edge.
-  std::array<int, 4> mid{{-1, -1, -1, -1}};
   bool IsTriangle() const { return v[3] < 0; }
   bool IsLeaf() const { return first_child < 0; }
 };
+static_assert(sizeof(Element) == 40, "README, Memory: bytes per element");
 
 // Ids in one of the mesh's flat arrays, [first, last): a patch's top
 // elements, a surface's scene faces (Mesh::Tops, Mesh::SceneFaces).
@@ -71,6 +72,7 @@ struct Patch {
   // (a range of one flat array rather than a vector a patch and its heap
   // block: 48 bytes a patch less).
   int32_t tops_at = 0, tops = 0;
+  int32_t next_piece = -1;       // the face's next patch SplitPatch appended, or -1
   double area = 0.0;
   glm::dvec3 center{0.0};        // area centroid: where the hemicube sits
 };
@@ -81,15 +83,49 @@ struct MeshFace {
   // The Scene::faces it covers, ascending: Mesh::face_scene[scene_at,
   // scene_at + scenes) (Mesh::SceneFaces).
   int32_t scene_at = 0, scenes = 0;
+  int material = 0;              // Scene::materials and Mesh::materials index
+  int vbegin = 0, vend = 0;      // its vertices: Mesh::verts[vbegin, vend)
+  // Its patches (Mesh::FacePatches): BuildMesh's, Mesh::patches[patch_at,
+  // patch_at + built), then those SplitPatch appended, first_piece to
+  // last_piece by Patch::next_piece (not a vector a face and its heap
+  // block: 40 bytes a face less).
+  int32_t patch_at = 0, built = 0, first_piece = -1, last_piece = -1;
   glm::dvec3 normal{0.0};
-  glm::dvec3 rho{0.0};           // Kd
-  glm::dvec3 emission{0.0};      // Ke
-  int material = 0;              // Scene::materials index
   double area = 0.0;
   double offset = 0.0;           // plane: dot(normal, x) == offset
-  int vbegin = 0, vend = 0;      // its vertices: Mesh::verts[vbegin, vend)
-  std::vector<int> divide_verts; // and those Divide() added since
-  std::vector<int> patches;
+  std::vector<int> divide_verts; // the vertices Divide() added since
+};
+
+// A face's patches in order, BuildMesh's then SplitPatch's pieces:
+// for (int p : mesh.FacePatches(face)).
+struct FacePatchIds {
+  const std::vector<Patch>* patches;
+  int32_t first, built_end, first_piece;
+  struct Iterator {
+    const FacePatchIds* ids;
+    int32_t p;
+    int operator*() const { return p; }
+    Iterator& operator++() {
+      p = p + 1 < ids->built_end ? p + 1
+          : p < ids->built_end   ? ids->first_piece
+                                 : (*ids->patches)[size_t(p)].next_piece;
+      return *this;
+    }
+    bool operator!=(const Iterator& o) const { return p != o.p; }
+  };
+  Iterator begin() const { return {this, first < built_end ? first : first_piece}; }
+  Iterator end() const { return {this, -1}; }
+  // Walks the pieces: a face has few.
+  size_t size() const {
+    size_t n = 0;
+    for (Iterator i = begin(); i != end(); ++i) ++n;
+    return n;
+  }
+  int operator[](size_t k) const {
+    Iterator i = begin();
+    while (k-- > 0) ++i;
+    return *i;
+  }
 };
 
 // Hash of a point by value (glm's == compares by value), for joining
@@ -140,6 +176,17 @@ struct Mesh {
   // first slot for its first piece; its other pieces are appended.
   std::vector<int32_t> patch_tops;
   std::vector<int32_t> face_scene;
+  // Per Scene::materials index: Kd and Ke, looked up through
+  // MeshFace::material (Rho, Emission) rather than 48 bytes in every face.
+  struct Material {
+    glm::dvec3 rho{0.0}, emission{0.0};
+  };
+  std::vector<Material> materials;
+  // The T-vertices of the elements with Element::tverts: mids[k] >= 0 is a
+  // vertex a finer neighbour put at the midpoint of edge v[k] -> v[k+1],
+  // drawn as a corner of this element too, so that the hemicube sees no
+  // crack and shading no seam along the edge.
+  std::unordered_map<int32_t, std::array<int, 4>> tverts;
   double patch_size = 0.0;     // as used
   double scene_diagonal = 0.0; // bounding-box diagonal, the scene's scale
   // The corners of the input faces that joined into larger surfaces, for
@@ -185,6 +232,9 @@ struct Mesh {
     const Patch& p = patches[size_t(patch)];
     return {patch_tops.data() + p.tops_at, patch_tops.data() + p.tops_at + p.tops};
   }
+  FacePatchIds FacePatches(const MeshFace& f) const {
+    return {&patches, f.patch_at, f.patch_at + f.built, f.first_piece};
+  }
   IdSpan SceneFaces(const MeshFace& f) const {
     return {face_scene.data() + f.scene_at, face_scene.data() + f.scene_at + f.scenes};
   }
@@ -193,6 +243,13 @@ struct Mesh {
   // Leaf elements under element `elem` (itself when it is a leaf).
   void LeavesUnder(int elem, std::vector<int>* out) const;
   const MeshFace& FaceOf(int elem) const { return faces[patches[elems[elem].patch].face]; }
+  const glm::dvec3& Rho(const MeshFace& f) const { return materials[size_t(f.material)].rho; }
+  const glm::dvec3& Emission(const MeshFace& f) const { return materials[size_t(f.material)].emission; }
+  // Element elem's T-vertices (Mesh::tverts), -1 where it has none.
+  std::array<int, 4> Mids(int elem) const {
+    if (!elems[size_t(elem)].tverts) return {{-1, -1, -1, -1}};
+    return tverts.at(elem);
+  }
   glm::dvec3 Centroid(int elem) const;
 };
 
@@ -221,7 +278,7 @@ MeshEstimate EstimateMesh(const Scene& scene, const std::vector<Surface>& surfac
                           const MeshOptions& opts);
 
 // The most elements a mesh may have, built or divided. The master needs
-// about 0.4 KB per element (memory.h), so this is about 3.5 GB.
+// about 0.4 KB per element (memory.h), so this is about 3.3 GB.
 constexpr int kMaxElements = 8'000'000;
 
 // Geometry shared by building (mesh.cpp) and division (divide.cpp).
@@ -258,10 +315,10 @@ constexpr uint64_t kNoEdge = ~uint64_t{0};
 // ConnectEdges().
 int MidpointOf(const Mesh& mesh, int a, int b);
 
-// The outline of element `e`: its corners and the T-vertices on its
+// The outline of element `elem`: its corners and the T-vertices on its
 // edges, counter-clockwise, from its first T-vertex if it has one (so a
 // fan from out[0] has no degenerate triangle). Returns the count, <= 8.
-int Outline(const Element& e, int out[8]);
+int Outline(const Mesh& mesh, int elem, int out[8]);
 
 // Leaf elements of the same face sharing a piece of an edge with leaf
 // `elem`: alike, finer (across a T-vertex) or coarser. Needs

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <cstdlib>
 #include <sstream>
+#include <unordered_map>
 
 #include "check.h"
 #include "files.h"
@@ -48,7 +49,7 @@ std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::d
     if (scene_faces.size() == 1) {  // all its leaves, in patch order
       glm::dvec3 sum(0.0);
       double area = 0;
-      for (int p : mf.patches) {
+      for (int p : mesh.FacePatches(mf)) {
         mesh.Leaves(p, &leaves);
         for (int e : leaves) {
           sum += elem_b[e] * mesh.elems[e].area;
@@ -66,7 +67,7 @@ std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::d
       glm::dvec2 lo, hi;
     };
     std::vector<Top> tops;
-    for (int p : mf.patches)
+    for (int p : mesh.FacePatches(mf))
       for (int e : mesh.Tops(p)) {
         const Element& el = mesh.elems[e];
         Top t{e, glm::dvec2(HUGE_VAL), glm::dvec2(-HUGE_VAL)};
@@ -278,10 +279,11 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   // Polygons counted first and reserved: grown by doubling they took up
   // to three times their 16 bytes an element while it grew.
   size_t npolys = 0;
-  for (const Element& el : mesh.elems) {
+  for (size_t e = 0; e < mesh.elems.size(); ++e) {
+    const Element& el = mesh.elems[e];
     if (!el.IsLeaf()) continue;
     int out[8];
-    const int m = Outline(el, out);
+    const int m = Outline(mesh, int(e), out);
     npolys += m == (el.IsTriangle() ? 3 : 4) ? 1 : size_t(m - 2);
   }
   s.polys.reserve(npolys);
@@ -291,7 +293,7 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
     // Drawn as a fan over its outline: where finer neighbours meet it,
     // it meets their edges exactly (no pixel cracks).
     int out[8];
-    const int m = Outline(el, out);
+    const int m = Outline(mesh, int(e), out);
     if (m == (el.IsTriangle() ? 3 : 4)) {
       s.polys.push_back(el.v);
     } else {
@@ -325,8 +327,10 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
            size_t(normal_key(v, 0) ^ normal_key(v, 1) ^ normal_key(v, 2)) ^
            size_t(mesh.faces[face_of[v]].material) * 101;
   };
+  // At most 3/4 full (the pair of 4-byte tables at the joining, face_of
+  // and this, was the peak of the master's last picture at half full).
   size_t slots = 16;
-  while (slots < 2 * mesh.verts.size()) slots *= 2;
+  while (3 * slots < 4 * mesh.verts.size()) slots *= 2;
   std::vector<int> first(slots, -1);  // a group's first vertex
   std::vector<int> group(mesh.verts.size());
   int groups = 0;
@@ -349,15 +353,21 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   // Most groups are one vertex, whose sums are its own (0 + x is x): sums
   // per group only for those joined (a group's members, then the index of
   // its sums or -1), and their members' own sums kept (`at`, in vertex
-  // order) until the groups' are summed.
+  // order) until the groups' are summed; each member's group sums index
+  // (`sums_of`) kept instead of the per-group table, freed before the
+  // colours are made.
   std::vector<int> joined(static_cast<size_t>(groups), 0);
   for (int g : group) ++joined[g];
   size_t njoined = 0;
   for (int& j : joined) j = j > 1 ? int(njoined++) : -1;
-  std::vector<int> at(mesh.verts.size(), -1);
-  size_t nmembers = 0;
+  std::vector<int> at(mesh.verts.size(), -1), sums_of;
   for (size_t v = 0; v < at.size(); ++v)
-    if (joined[group[v]] >= 0) at[v] = int(nmembers++);
+    if (joined[group[v]] >= 0) {
+      at[v] = int(sums_of.size());
+      sums_of.push_back(joined[group[v]]);
+    }
+  std::vector<int>().swap(joined);
+  const size_t nmembers = sums_of.size();
   std::vector<glm::dvec3> msum(nmembers, glm::dvec3(0.0));
   std::vector<double> mw(nmembers, 0.0);
   // Each vertex's area-weighted sum over the leaves around it, a face at a
@@ -370,7 +380,7 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   std::vector<double> w;
   for (const MeshFace& f : mesh.faces) {
     leaves.clear();
-    for (int p : f.patches) {
+    for (int p : mesh.FacePatches(f)) {
       mesh.Leaves(p, &under);
       leaves.insert(leaves.end(), under.begin(), under.end());
     }
@@ -409,39 +419,43 @@ ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
   std::vector<double> gw(njoined, 0.0);
   for (size_t v = 0; v < at.size(); ++v)
     if (at[v] >= 0) {
-      const int j = joined[group[v]];
+      const int j = sums_of[size_t(at[v])];
       gsum[j] += msum[size_t(at[v])];
       gw[j] += mw[size_t(at[v])];
     }
   for (size_t v = 0; v < at.size(); ++v)
     if (at[v] >= 0) {
-      const int j = joined[group[v]];
+      const int j = sums_of[size_t(at[v])];
       if (gw[j] > 0) s.colors[v] = glm::vec3(gsum[j] / gw[j]);
     }
   for (auto* x : {&sum, &gsum, &msum}) std::vector<glm::dvec3>().swap(*x);
   for (auto* x : {&w, &gw, &mw}) std::vector<double>().swap(*x);
-  std::vector<int>().swap(joined);
-  std::vector<int>().swap(at);
+  for (auto* x : {&at, &sums_of}) std::vector<int>().swap(*x);
   // A T-vertex takes the value interpolated along the coarser edge it lies
   // on, so both sides shade that edge alike (no seam); so do the vertices
   // joined with it across coplanar faces. Coarser first: a corner of a
   // finer element may itself be a T-vertex of a coarser one.
   std::stable_sort(t_leaves.begin(), t_leaves.end(),
                    [&](int a, int b) { return mesh.elems[a].level < mesh.elems[b].level; });
-  std::vector<glm::vec3> on_edge(static_cast<size_t>(groups));
-  std::vector<char> is_t(static_cast<size_t>(groups), 0);
-  auto color = [&](int v) { return is_t[group[v]] ? on_edge[group[v]] : s.colors[v]; };
+  // By group, the T-vertices' only: few, so not an array over all groups
+  // (13 bytes a vertex, the peak of the master's last picture).
+  std::unordered_map<int, glm::vec3> on_edge;
+  auto color = [&](int v) {
+    const auto it = on_edge.find(group[v]);
+    return it != on_edge.end() ? it->second : s.colors[v];
+  };
   for (int e : t_leaves) {
     const Element& el = mesh.elems[e];
+    const std::array<int, 4> mids = mesh.Mids(e);
     const int n = el.IsTriangle() ? 3 : 4;
     for (int k = 0; k < n; ++k)
-      if (el.mid[k] >= 0) {
-        on_edge[group[el.mid[k]]] = 0.5f * (color(el.v[k]) + color(el.v[(k + 1) % n]));
-        is_t[group[el.mid[k]]] = 1;
+      if (mids[k] >= 0) {
+        const glm::vec3 c = 0.5f * (color(el.v[k]) + color(el.v[(k + 1) % n]));
+        on_edge[group[mids[k]]] = c;
       }
   }
-  for (size_t v = 0; v < s.colors.size(); ++v)
-    if (is_t[group[v]]) s.colors[v] = on_edge[group[v]];
+  for (size_t v = 0; v < s.colors.size() && !on_edge.empty(); ++v)
+    if (const auto it = on_edge.find(group[v]); it != on_edge.end()) s.colors[v] = it->second;
   return s;
 }
 
@@ -458,7 +472,7 @@ double Side(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& x, const
 glm::dvec3 Drawn(const Mesh& mesh, const ShadedMesh& shaded, int e, const glm::dvec3& x,
                  const glm::dvec3& n) {
   int out[8];
-  const int m = Outline(mesh.elems[e], out);
+  const int m = Outline(mesh, e, out);
   glm::dvec3 value(0.0);
   double best = -HUGE_VAL;
   for (int i = 1; i + 1 < m; ++i) {
@@ -500,10 +514,12 @@ void FieldError(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const M
     // same face here (patches may have been split, in either mesh).
     const MeshFace& face = mesh.faces[size_t(ref.patches[rel.patch].face)];
     int e = -1;
-    for (size_t i = 0; i < face.patches.size() && e < 0; ++i)
-      for (int top : mesh.Tops(face.patches[i]))
+    for (int p : mesh.FacePatches(face)) {
+      for (int top : mesh.Tops(p))
         if (inside(top, x, n)) { e = top; break; }
-    if (e < 0) e = mesh.Tops(face.patches[0])[0];  // rounding at an edge
+      if (e >= 0) break;
+    }
+    if (e < 0) e = mesh.Tops(mesh.FacePatches(face)[0])[0];  // rounding at an edge
     while (!mesh.elems[e].IsLeaf()) {
       int next = mesh.elems[e].first_child;
       for (int k = 0; k < kChildren; ++k)

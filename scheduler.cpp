@@ -24,6 +24,10 @@ bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wa
   const double t0 = ThreadCpuSeconds();
   if (due) {
     solver->TakeChanged(changed);
+    // The adjacency (some 40 bytes an element) from the first pass on, not
+    // from the start: with -j 0 the hemicube's cache is built at the first
+    // shot, larger while it is built than after, and they need not meet.
+    ConnectEdges(mesh);
     *edits = subdivider->Pass(*mesh, solver->radiosity(), solver->noise(), solver->Ambient(),
                               shots_in_wave, *changed);
     for (int32_t e : *edits) Divide(mesh, e);

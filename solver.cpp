@@ -57,10 +57,11 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
   glm::dvec3 rho_area(0.0);
   for (size_t p = 0; p < mesh.patches.size(); ++p) {
     const MeshFace& f = mesh.faces[mesh.patches[p].face];
+    const glm::dvec3& ke = mesh.Emission(f);
     const double a = mesh.patches[p].area;
     total_area_ += a;
-    emitted_ += (f.emission.r + f.emission.g + f.emission.b) * a;
-    rho_area += f.rho * a;
+    emitted_ += (ke.r + ke.g + ke.b) * a;
+    rho_area += mesh.Rho(f) * a;
   }
   if (total_area_ > 0) {
     // Cohen et al.'s interreflection factor 1/(1−ρ̄). ρ̄ = 1 (a scene that
@@ -81,12 +82,12 @@ void Solver::PatchArrays() {
   weight_.resize(n);
   if (!pixel_df_.empty()) pixel_df_.resize(n);  // noise tracked: per patch too
   for (size_t p = 0; p < n; ++p) {
-    const MeshFace& f = mesh_.faces[mesh_.patches[p].face];
-    patch_[p].rho = f.rho;
+    const glm::dvec3& rho = mesh_.Rho(mesh_.faces[mesh_.patches[p].face]);
+    patch_[p].rho = rho;
     patch_[p].area = mesh_.patches[p].area;
     patch_[p].fsum = 0;
     center_[p] = mesh_.patches[p].center;
-    weight_[p] = patch_[p].area * std::max({f.rho.r, f.rho.g, f.rho.b});
+    weight_[p] = patch_[p].area * std::max({rho.r, rho.g, rho.b});
   }
   // A group's drift moves Σ of its members' powers: its key (members[0])
   // carries their weights summed, the other members none (never chosen).
@@ -100,13 +101,13 @@ void Solver::PatchArrays() {
 
 void Solver::NewWave() {
   Grow();
-  for (size_t e = 0; e < b_.size(); ++e) b_[e] = mesh_.FaceOf(int(e)).emission;
+  for (size_t e = 0; e < b_.size(); ++e) b_[e] = mesh_.Emission(mesh_.FaceOf(int(e)));
   if (pixel_ff_ > 0) noise_.assign(b_.size(), 0.0);
   if (track_direct_) direct_.assign(b_.size(), 0.0f);
   patch_.resize(mesh_.patches.size());
   lit_.resize(mesh_.patches.size());
   for (size_t p = 0; p < patch_.size(); ++p) {
-    patch_[p].unshot = mesh_.faces[mesh_.patches[p].face].emission;
+    patch_[p].unshot = mesh_.Emission(mesh_.faces[mesh_.patches[p].face]);
     lit_[p] = Abs(patch_[p].unshot) > 0;
   }
   times_shot_.assign(mesh_.patches.size(), 0);
@@ -123,7 +124,7 @@ void Solver::CountDarkEmitters() {
     if (blind_[p] || times_shot_[p] > 0 || !IsShooter(mesh_, int(p))) continue;
     const int32_t shooter = int32_t(p);
     double ke = 0;
-    for (int32_t m : ShootsAs(mesh_, shooter)) ke += Abs(mesh_.faces[mesh_.patches[size_t(m)].face].emission);
+    for (int32_t m : ShootsAs(mesh_, shooter)) ke += Abs(mesh_.Emission(mesh_.faces[mesh_.patches[size_t(m)].face]));
     if (ke > 0) ++dark_emitters_;
   }
 }
@@ -280,7 +281,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   glm::dvec3 xa(0.0);  // Σ x·A of what shoots
   glm::dvec3 ka(0.0);  // Σ Ke·A of it, at its first shot in the wave (TrackDirect)
   for (const int32_t m : ShootsAs(mesh_, shooter)) {
-    if (times_shot_[p] == 0) ka += mesh_.faces[mesh_.patches[m].face].emission * patch_[m].area;
+    if (times_shot_[p] == 0) ka += mesh_.Emission(mesh_.faces[mesh_.patches[m].face]) * patch_[m].area;
     // A shooter that sees no element sends its light out of the scene:
     // its unshot radiosity is spent, and it is never chosen again (nothing
     // can send it light either, by reciprocity).
@@ -514,6 +515,7 @@ void Solver::Split(int p) {
   std::vector<int> pieces{p};
   for (size_t q = from; q < n; ++q) pieces.push_back(int(q));
   const MeshFace& face = mesh_.faces[size_t(mesh_.patches[size_t(p)].face)];
+  const glm::dvec3 &kd = mesh_.Rho(face), &ke = mesh_.Emission(face);
   patch_.resize(n);
   for (size_t q = from; q < n; ++q) patch_[q].rho = rho;
   weight_.resize(n);
@@ -530,7 +532,7 @@ void Solver::Split(int p) {
     const int q = pieces[i];
     patch_[size_t(q)].area = mesh_.patches[size_t(q)].area;
     center_[size_t(q)] = mesh_.patches[size_t(q)].center;
-    weight_[size_t(q)] = patch_[size_t(q)].area * std::max({face.rho.r, face.rho.g, face.rho.b});
+    weight_[size_t(q)] = patch_[size_t(q)].area * std::max({kd.r, kd.g, kd.b});
     const IdSpan tops = mesh_.Tops(q);
     std::vector<int> stack(tops.begin(), tops.end());
     while (!stack.empty()) {
@@ -543,7 +545,7 @@ void Solver::Split(int p) {
         continue;
       }
       patch_of_[size_t(e)] = q;
-      got[i] += glm::max(b_[size_t(e)] - face.emission, glm::dvec3(0.0)) * el.area;
+      got[i] += glm::max(b_[size_t(e)] - ke, glm::dvec3(0.0)) * el.area;
     }
     total += got[i];
   }

@@ -126,6 +126,8 @@ class Solver {
   int TimesShot(int p) const { return times_shot_[p]; }
   const std::vector<int>& times_shot() const { return times_shot_; } // per patch, this wave
   const std::vector<glm::dvec3>& radiosity() const { return b_; }  // per element
+  // B moved out, for a caller done with the solver (no copy beside it).
+  std::vector<glm::dvec3> TakeRadiosity() { return std::move(b_); }
   std::vector<glm::dvec3> unshot() const;  // per patch, a copy (State, tests)
   glm::dvec3 Ambient() const;  // the overshooting estimate before ρ
 

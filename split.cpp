@@ -55,7 +55,10 @@ void SplitPatch(Mesh* mesh, int patch) {
     const int id = i == 0 ? patch : int(mesh->patches.size());
     if (i > 0) {
       mesh->patches.emplace_back();
-      mesh->faces[size_t(face)].patches.push_back(id);
+      MeshFace& f = mesh->faces[size_t(face)];
+      if (f.last_piece < 0) f.first_piece = id;
+      else mesh->patches[size_t(f.last_piece)].next_piece = id;
+      f.last_piece = id;
       if (!mesh->group_of.empty()) mesh->group_of.push_back(-1);
     }
     // As BuildMesh makes a patch: its top elements' areas and centroids.
@@ -86,7 +89,7 @@ namespace {
 // A patch SplitPass may split: not an emitter, with pieces (SplitPieces;
 // not in a shooter group) into *tops.
 bool Splittable(const Mesh& m, int p, std::vector<int>* tops) {
-  const glm::dvec3& ke = m.faces[size_t(m.patches[size_t(p)].face)].emission;
+  const glm::dvec3& ke = m.Emission(m.faces[size_t(m.patches[size_t(p)].face)]);
   return !(ke.r + ke.g + ke.b > 0) && SplitPieces(m, p, tops) > 1;
 }
 
@@ -176,7 +179,7 @@ void Subdivider::Spread(const Mesh& mesh, const std::vector<float>& direct, size
     double sum = 0, area = 0;  // over every leaf not emitting
     for (size_t e = 0; e < mesh.elems.size(); ++e) {
       const Element& el = mesh.elems[e];
-      const glm::dvec3& ke = mesh.FaceOf(int(e)).emission;
+      const glm::dvec3& ke = mesh.Emission(mesh.FaceOf(int(e)));
       if (!el.IsLeaf() || ke.r + ke.g + ke.b > 0) continue;
       sum += double(direct[e]) * el.area;
       area += el.area;

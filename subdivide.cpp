@@ -20,8 +20,10 @@ constexpr double kNoiseSigmas = 3.5;
 // and by looser bounds respectively).
 constexpr double kDrift = 1.0 / 16;
 
-// Subdivider::eligible_'s bits.
-constexpr uint8_t kLeaf = 1, kEligible = 2;
+// Subdivider::eligible_'s bits: a leaf; one that may be divided; one the
+// lit scene's mean counts (a leaf that does not emit; its area is read
+// from the mesh, not kept: 8 bytes an element).
+constexpr uint8_t kLeaf = 1, kEligible = 2, kLit = 4;
 
 // x rounded up to a float.
 float Up(double x) {
@@ -43,12 +45,11 @@ Subdivider::Subdivider(Mesh* mesh, const SubdivideOptions& opts)
   CHECK(opts_.between >= 10 && opts_.floor > 0 && opts_.threshold >= opts_.floor);
   CHECK(opts_.split_floor > 0 && opts_.split_threshold >= opts_.split_floor);
   if (!(opts_.min_size > 0)) opts_.min_size = mesh->scene_diagonal / 400;
-  ConnectEdges(mesh);
   // The radiosity is worth dividing by once every light source has shot
   // (paper §4.3: 20 to 50 shots; more lights, later), scaled to the scene.
   long emitters = 0;
   for (const Patch& p : mesh->patches) {
-    const glm::dvec3& ke = mesh->faces[p.face].emission;
+    const glm::dvec3& ke = mesh->Emission(mesh->faces[p.face]);
     if (ke.r + ke.g + ke.b > 0) ++emitters;
   }
   first_ = std::max(std::clamp(long(mesh->patches.size()) / 20, 20L, 50L), emitters);
@@ -65,22 +66,18 @@ bool Subdivider::Due(long shots) const {
 void Subdivider::Track(const Mesh& mesh) {
   const size_t from = eligible_.size(), n = mesh.elems.size();
   eligible_.resize(n);
-  mean_area_.resize(n);
   synced_.resize(n, NAN);
   bound_.resize(n, 0);
   at_pass_.resize(n, -1);
   mark_.resize(n, 0);
   for (size_t e = from; e < n; ++e) {
     const Element& el = mesh.elems[e];
-    const glm::dvec3& ke = mesh.FaceOf(int(e)).emission;
+    const glm::dvec3& ke = mesh.Emission(mesh.FaceOf(int(e)));
     eligible_[e] = el.IsLeaf() ? kLeaf : 0;
     if (el.IsLeaf() && el.level < opts_.max_level && ShortestEdge(mesh, el) / 2 >= opts_.min_size)
       eligible_[e] |= kEligible;
-    mean_area_[e] = el.IsLeaf() && !(ke.r + ke.g + ke.b > 0) ? el.area : -1;
-    if (el.parent >= 0 && size_t(el.parent) < from) {
-      eligible_[size_t(el.parent)] = 0;
-      mean_area_[size_t(el.parent)] = -1;
-    }
+    if (el.IsLeaf() && !(ke.r + ke.g + ke.b > 0)) eligible_[e] |= kLit;
+    if (el.parent >= 0 && size_t(el.parent) < from) eligible_[size_t(el.parent)] = 0;
   }
 }
 
@@ -112,7 +109,7 @@ double Subdivider::Factor(const Mesh& mesh, const std::vector<glm::dvec3>& b,
   std::vector<int>& nb = nb_;
   const Element& el = mesh.elems[size_t(e)];
   LeafNeighbours(mesh, e, &nb);
-  const double unsure = Lum(mesh.FaceOf(e).rho * ambient) + 0.2 * mean;
+  const double unsure = Lum(mesh.Rho(mesh.FaceOf(e)) * ambient) + 0.2 * mean;
   const glm::dvec3 c = mesh.Centroid(e);
   const double size = std::sqrt(el.area), be = Lum(b[size_t(e)]);
   const double se = synced_[size_t(e)], te = kDrift * std::abs(se);
@@ -171,9 +168,10 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::d
   double sum = 0, area = 0;  // the lit scene's mean: the absolute part of the scale
   for (size_t e = 0; e < n; ++e) {
     if (scan && eligible_[e] & kLeaf) sync(e);
-    if (mean_area_[e] < 0) continue;
-    sum += Lum(b[e]) * mean_area_[e];
-    area += mean_area_[e];
+    if (!(eligible_[e] & kLit)) continue;
+    const double a = mesh.elems[e].area;
+    sum += Lum(b[e]) * a;
+    area += a;
   }
   const double mean = area > 0 ? sum / area : 0;
 

@@ -125,7 +125,6 @@ struct SubdividerState {
 
 class Subdivider {
  public:
-  // Connects the mesh's edges (ConnectEdges) for the neighbour search.
   Subdivider(Mesh* mesh, const SubdivideOptions& opts);
 
   // Whether a pass is due after `shots` shots of the current wave: not
@@ -156,10 +155,11 @@ class Subdivider {
   // Kd·ambient + 0.2·mean, by at most the ratio of the old shared terms
   // to the new (PassBound). A scan of three numbers per leaf (12 bytes:
   // s and the bound as floats, the pass) finds those; the mean of the lit
-  // scene is still summed over every leaf (8 bytes each, in order: the
-  // same sum). A moved leaf costs two neighbour searches (itself, its
+  // scene is still summed over every leaf (its area read from the mesh,
+  // in order: the same sum). A moved leaf costs two neighbour searches (itself, its
   // neighbours): when over a quarter moved, the pass evaluates every leaf
-  // instead.
+  // instead. Needs the mesh's edges connected (ConnectEdges) for the
+  // neighbour search.
   std::vector<int32_t> Pass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
                             const std::vector<double>& noise, const glm::dvec3& ambient,
                             long shots, const std::vector<int32_t>& changed);
@@ -222,13 +222,12 @@ class Subdivider {
   void Spread(const Mesh& mesh, const std::vector<float>& direct, size_t from);
 
   SubdivideOptions opts_;
-  // Per element, grown as the mesh is: may it be divided (a leaf above
-  // max_level, long enough); its area if the lit mean counts it, else -1;
+  // Per element, grown as the mesh is: is it a leaf, may it be divided (a
+  // leaf above max_level, long enough), does the lit mean count it;
   // its luminance when last synced (NaN: never); the bound on its factor
   // as last computed, rounded up, and the pass of this wave that did (-1:
   // none; bound +inf: to be computed every pass, no bound holds).
   std::vector<uint8_t> eligible_;
-  std::vector<double> mean_area_;
   std::vector<float> synced_;
   std::vector<float> bound_;
   std::vector<int32_t> at_pass_;

@@ -125,7 +125,7 @@ TEST_P(GroupShot, KeepsEnergyExactly) {
   glm::dvec3 gain(0.0);
   for (const FormFactor& ff : col) {
     EXPECT_NE(m.group_of[m.elems[ff.elem].patch], m.group_of[p]) << "a member received";
-    gain += m.FaceOf(ff.elem).rho * xa * double(ff.f);
+    gain += m.Rho(m.FaceOf(ff.elem)) * xa * double(ff.f);
   }
   const glm::dvec3 before = unshot_power();
   solver.Shoot(p, col);
@@ -217,7 +217,7 @@ TEST(Groups, NeverAcrossAWallNorFacingAwayNorOneBehindTheOther) {
   o.patch_size = 0.5;
   const Mesh m = MakeMesh(s, o);
   // One patch per small face, in face order after the floor's 8 x 8.
-  auto patch = [&](int face) { return m.faces[face].patches.at(0); };
+  auto patch = [&](int face) { return m.FacePatches(m.faces[face])[0]; };
   auto together = [&](int first) { return Grouped(m, patch(first), patch(first + 1)); };
   EXPECT_TRUE(together(plain));
   EXPECT_FALSE(together(walled));
@@ -232,7 +232,7 @@ TEST(Groups, NeverAcrossAWallNorFacingAwayNorOneBehindTheOther) {
   EXPECT_FALSE(Grouped(m, patch(walled + 2), patch(walled + 3)));
   // The big floor's patches are the patch size: no candidates, though
   // what they light (what faces down) is 1 and more away.
-  for (int q : m.faces[0].patches) EXPECT_EQ(m.group_of[q], -1);
+  for (int q : m.FacePatches(m.faces[0])) EXPECT_EQ(m.group_of[q], -1);
 }
 
 }  // namespace

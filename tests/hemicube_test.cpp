@@ -58,10 +58,10 @@ TEST(Hemicube, PointToParallelSquareMatchesAnalytic) {
     o.patch_size = 100;  // one patch per face
     o.elements_per_patch = 16;
     Mesh m = MakeMesh(s, o);
-    ASSERT_EQ(m.faces[0].patches.size(), 1u);
+    ASSERT_EQ(m.FacePatches(m.faces[0]).size(), 1u);
     Hemicube h(256);
     std::vector<FormFactor> col;
-    h.Column(m, m.faces[0].patches[0], 0.2, &col);
+    h.Column(m, m.FacePatches(m.faces[0])[0], 0.2, &col);
     const double exact = 4 * CornerParallel(half, half, 1.0);
     EXPECT_NEAR(SumOverFace(m, col, 1), exact, 0.005 * exact) << "half " << half;
   }
@@ -114,7 +114,7 @@ TEST(Hemicube, BackFacesAndFacesBehindGetNothing) {
   Mesh m = MakeMesh(s);
   Hemicube h(64);
   std::vector<FormFactor> col;
-  for (int p : m.faces[0].patches) {
+  for (int p : m.FacePatches(m.faces[0])) {
     h.Column(m, p, 0.0, &col);
     EXPECT_TRUE(col.empty());
   }

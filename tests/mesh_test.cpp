@@ -13,7 +13,7 @@ namespace {
 double LeafArea(const Mesh& m, int face) {
   double a = 0;
   std::vector<int> leaves;
-  for (int p : m.faces[face].patches) {
+  for (int p : m.FacePatches(m.faces[face])) {
     m.Leaves(p, &leaves);
     for (int e : leaves) a += m.elems[e].area;
   }
@@ -61,7 +61,7 @@ TEST(Mesh, ElementsTileEveryFaceExactly) {
   for (size_t f = 0; f < s.faces.size(); ++f) {
     EXPECT_NEAR(LeafArea(m, int(f)), s.faces[f].area, 1e-9 * s.faces[f].area) << "face " << f;
     double pa = 0;
-    for (int p : m.faces[f].patches) pa += m.patches[p].area;
+    for (int p : m.FacePatches(m.faces[f])) pa += m.patches[p].area;
     EXPECT_NEAR(pa, s.faces[f].area, 1e-9 * s.faces[f].area);
   }
   // Every element faces the way its face does.

@@ -112,7 +112,7 @@ TEST(Split, SolverKeepsTheUnshotPower) {
     solver.Shoot(p, col);
   }
   int p = 0;
-  while (m.faces[m.patches[p].face].emission != glm::dvec3(0) ||
+  while (m.Emission(m.faces[m.patches[p].face]) != glm::dvec3(0) ||
          solver.unshot()[p].r == 0)
     ++p;
   const glm::dvec3 before(Sum(solver.unshot(), m, 0), Sum(solver.unshot(), m, 1),
@@ -160,7 +160,7 @@ TEST(Split, PolicySplitsUnevenPatchesOnly) {
   std::vector<int> shot(m.patches.size(), 0);
   d[size_t(m.Tops(2)[0])] = 0.0f;  // patch 2: one dark piece, spread 0.85
   d[size_t(m.Tops(1)[3])] = 0.1f;  // patch 1: spread 0.77
-  for (int p : m.faces[1].patches)  // the light: uneven, never split
+  for (int p : m.FacePatches(m.faces[1]))  // the light: uneven, never split
     d[size_t(m.Tops(p)[0])] = 0.0f;
   // Before every emitter shot, nothing, and the threshold waits.
   EXPECT_TRUE(sub.SplitPass(m, d, false, shot).empty());
@@ -196,7 +196,7 @@ Scene FloorUnderAFace() {
 TEST(Split, CloseReceiversSplitAPatch) {
   Mesh m = MakeMesh(FloorUnderAFace(), Coarse());
   int under = -1;
-  for (int p : m.faces[0].patches)
+  for (int p : m.FacePatches(m.faces[0]))
     if (glm::length(m.patches[p].center - glm::dvec3(0.25, 0, 0.25)) < 1e-9) under = p;
   ASSERT_GE(under, 0);
   SubdivideOptions so;
@@ -206,7 +206,7 @@ TEST(Split, CloseReceiversSplitAPatch) {
   const std::vector<int> shot(m.patches.size(), 0);
   std::vector<int32_t> got = sub.SplitPass(m, d, false, shot);
   EXPECT_NE(std::find(got.begin(), got.end(), under), got.end());
-  for (int p : m.faces[0].patches) {
+  for (int p : m.FacePatches(m.faces[0])) {
     if (p == under) continue;
     EXPECT_EQ(std::find(got.begin(), got.end(), p), got.end()) << p;
   }
@@ -243,9 +243,9 @@ TEST(Split, DirectLightDoesNotDependOnShotOrder) {
   AddFace(&s, {{0.1, 0.5, 0.1}, {0.3, 0.5, 0.1}, {0.3, 0.5, 0.3}, {0.1, 0.5, 0.3}},
           glm::dvec3(0.5), glm::dvec3(4.0));
   const Mesh m = MakeMesh(s, Coarse());
-  const int l1 = m.faces[1].patches[0], l2 = m.faces[2].patches[0];
-  ASSERT_EQ(m.faces[1].patches.size(), 1u);
-  ASSERT_EQ(m.faces[2].patches.size(), 1u);
+  const int l1 = m.FacePatches(m.faces[1])[0], l2 = m.FacePatches(m.faces[2])[0];
+  ASSERT_EQ(m.FacePatches(m.faces[1]).size(), 1u);
+  ASSERT_EQ(m.FacePatches(m.faces[2]).size(), 1u);
   Hemicube h(64);
   std::vector<FormFactor> col;
   auto shoot = [&](Solver* solver, int p) {
@@ -261,7 +261,7 @@ TEST(Split, DirectLightDoesNotDependOnShotOrder) {
   shoot(&a, l2);
   EXPECT_TRUE(a.DirectDone());
   shoot(&b, l2);
-  shoot(&b, m.faces[0].patches[1]);  // a floor patch, lit by l2, between
+  shoot(&b, m.FacePatches(m.faces[0])[1]);  // a floor patch, lit by l2, between
   shoot(&b, l1);
   shoot(&b, l2);  // a second shot of a light is not its first light
   EXPECT_TRUE(b.DirectDone());

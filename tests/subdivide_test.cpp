@@ -83,7 +83,7 @@ TEST(Divide, NeighboursShareMidpointsAndSeeTVertices) {
   const int mid = MidpointOf(m, m.elems[a].v[1], m.elems[a].v[2]);
   EXPECT_EQ(m.verts[mid], glm::dvec3(0.5, 0.25, 0));
   int tvs = 0;
-  for (int v : m.elems[b].mid) tvs += v == mid;
+  for (int v : m.Mids(b)) tvs += v == mid;
   EXPECT_EQ(tvs, 1) << "b holds a's midpoint as a T-vertex";
   std::vector<int> nb;
   LeafNeighbours(m, b, &nb);
@@ -95,7 +95,7 @@ TEST(Divide, NeighboursShareMidpointsAndSeeTVertices) {
   Divide(&m, b);
   EXPECT_EQ(m.verts.size(), verts + 4) << "3 new midpoints and a centre, the shared one reused";
   for (int k = 0; k < kChildren; ++k)
-    for (int v : m.elems[m.elems[b].first_child + k].mid) EXPECT_LT(v, 0);
+    for (int v : m.Mids(m.elems[b].first_child + k)) EXPECT_LT(v, 0);
 }
 
 TEST(Divide, SameEditsGiveTheSameMesh) {
@@ -110,7 +110,7 @@ TEST(Divide, SameEditsGiveTheSameMesh) {
   for (size_t v = 0; v < a.verts.size(); ++v) EXPECT_EQ(a.verts[v], b.verts[v]);
   for (size_t e = 0; e < a.elems.size(); ++e) {
     EXPECT_EQ(a.elems[e].v, b.elems[e].v);
-    EXPECT_EQ(a.elems[e].mid, b.elems[e].mid);
+    EXPECT_EQ(a.Mids(int(e)), b.Mids(int(e)));
     EXPECT_EQ(a.elems[e].first_child, b.elems[e].first_child);
   }
 }
@@ -143,12 +143,14 @@ TEST(Divide, ShadingInterpolatesAtTVertices) {
   std::vector<glm::dvec3> b(m.elems.size());
   for (size_t e = 0; e < b.size(); ++e) b[e] = glm::dvec3(m.Centroid(int(e)).x * 3 + 1);
   ShadedMesh sh = Shade(m, b);
-  for (const Element& e : m.elems) {
+  for (size_t i = 0; i < m.elems.size(); ++i) {
+    const Element& e = m.elems[i];
     if (!e.IsLeaf()) continue;
+    const std::array<int, 4> mids = m.Mids(int(i));
     for (int k = 0; k < 4; ++k)
-      if (e.mid[k] >= 0) {
+      if (mids[k] >= 0) {
         const glm::vec3 want = 0.5f * (sh.colors[e.v[k]] + sh.colors[e.v[(k + 1) % 4]]);
-        EXPECT_FLOAT_EQ(sh.colors[e.mid[k]].r, want.r);
+        EXPECT_FLOAT_EQ(sh.colors[mids[k]].r, want.r);
       }
   }
 }
@@ -213,7 +215,7 @@ TEST(Solver, ShootsColumnsOfAnOlderHierarchy) {
   std::vector<int> leaves;
   for (const FormFactor& f : col) {
     const Element& e = m.elems[f.elem];
-    const double rho = m.FaceOf(f.elem).rho.r;
+    const double rho = m.Rho(m.FaceOf(f.elem)).r;
     want += rho * 4 * f.f * m.patches[p].area;
     m.LeavesUnder(f.elem, &leaves);
     for (int l : leaves) {
@@ -236,7 +238,7 @@ TEST(Solver, NewWaveStartsFromTheEmitters) {
   solver.NewWave();
   EXPECT_EQ(solver.UnshotFraction(), 1.0);
   for (size_t e = 0; e < lit.mesh.elems.size(); ++e)
-    EXPECT_EQ(solver.radiosity()[e], lit.mesh.FaceOf(int(e)).emission);
+    EXPECT_EQ(solver.radiosity()[e], lit.mesh.Emission(lit.mesh.FaceOf(int(e))));
   for (size_t p = 0; p < lit.mesh.patches.size(); ++p) EXPECT_EQ(solver.TimesShot(int(p)), 0);
 }
 
