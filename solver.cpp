@@ -132,20 +132,28 @@ void Solver::CountDarkEmitters() {
 // element's patch is stored complemented so that Shoot tells it apart
 // from a leaf without touching the Element.
 void Solver::Grow() {
-  const size_t from = patch_of_.size(), n = mesh_.elems.size();
+  const size_t from = elem_.size(), n = mesh_.elems.size();
   b_.resize(n);
-  patch_of_.resize(n);
-  elem_area_.resize(n);
-  is_changed_.resize(n, 0);
+  elem_.resize(n);
   if (pixel_ff_ > 0) noise_.resize(n, 0.0);
   if (track_direct_) direct_.resize(n, 0.0f);
   // Only added elements and their parents (divided since): O(divisions).
   for (size_t e = from; e < n; ++e) {
     const Element& el = mesh_.elems[e];
-    patch_of_[e] = el.IsLeaf() ? el.patch : ~el.patch;
-    elem_area_[e] = el.area;
-    if (el.parent >= 0 && size_t(el.parent) < from) patch_of_[size_t(el.parent)] = ~el.patch;
+    elem_[e].patch = el.IsLeaf() ? el.patch : ~el.patch;
+    elem_[e].area = el.area;
+    if (el.parent >= 0 && size_t(el.parent) < from) elem_[size_t(el.parent)].patch = ~el.patch;
   }
+  HugeArrays();
+}
+
+// What Shoot reads at a column's elements, scattered over arrays of 10^5
+// entries and more, in 2 MB pages (memory.h); elem_ and patch_ are
+// allocated so, these are handed out as std::vector.
+void Solver::HugeArrays() {
+  PreferHugePages(b_.data(), b_.size() * sizeof b_[0]);
+  PreferHugePages(noise_.data(), noise_.size() * sizeof(double));
+  PreferHugePages(direct_.data(), direct_.size() * sizeof(float));
 }
 
 void Solver::TrackNoise(int resolution) {
@@ -154,11 +162,13 @@ void Solver::TrackNoise(int resolution) {
   pixel_ff_ = 4 / (M_PI * double(resolution) * resolution);
   noise_.resize(b_.size(), 0.0);
   pixel_df_.resize(mesh_.patches.size());
+  HugeArrays();
 }
 
 void Solver::TrackDirect() {
   track_direct_ = true;
   direct_.resize(b_.size(), 0.0f);
+  HugeArrays();
 }
 
 void Solver::Resum() {
@@ -298,7 +308,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   // share one ρ it is enough to sum F per patch here (the master's
   // per-shot cost bounds the speedup, paper graph 2).
   // Ids increase along a column: the last is the largest.
-  CHECK(column.empty() || size_t(column.back().elem) < patch_of_.size());
+  CHECK(column.empty() || size_t(column.back().elem) < elem_.size());
   // At 10^5 elements and more the arrays are far larger than the caches
   // and a column's elements are sparse in them: each element would wait
   // for memory (~100 ns). Fetched kAhead elements early, it does not.
@@ -323,27 +333,25 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     return pixel_df_[size_t(q)];
   };
   // Its patch's record (ρ, Σ F: one line) is fetched kAhead early too,
-  // from its patch id fetched 2 kAhead early.
+  // from its patch id fetched 2 kAhead early with its area.
   for (size_t i = 0; i < n; ++i) {
-    if (i + 2 * kAhead < n) __builtin_prefetch(&patch_of_[size_t(col[i + 2 * kAhead].elem)]);
+    if (i + 2 * kAhead < n) __builtin_prefetch(&elem_[size_t(col[i + 2 * kAhead].elem)]);
     if (i + kAhead < n) {
       const int32_t a = col[i + kAhead].elem;
       __builtin_prefetch(&b_[size_t(a)], 1);
-      __builtin_prefetch(&elem_area_[size_t(a)]);
-      const int32_t qa = patch_of_[size_t(a)];
+      const int32_t qa = elem_[size_t(a)].patch;
       if (qa >= 0) __builtin_prefetch(&patch_[size_t(qa)], 1);
       if (noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
     }
     const int32_t e = col[i].elem;
-    int32_t q = patch_of_[e];
+    int32_t q = elem_[e].patch;
     const double f = double(col[i].f);
     // ρ/A from the patch's ρ and the element's area here rather than a
     // copy per element (24 bytes an element): the same division, so the
-    // same bits. The area is the solver's copy (elem_area_, 8 bytes an
-    // element): two dense arrays read in id order, not a 56-byte Element
-    // a cache line each.
+    // same bits. The area is the solver's copy (elem_), not the 56-byte
+    // Element a cache line each.
     if (q >= 0) {
-      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_area_[size_t(e)]);
+      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_[size_t(e)].area);
       const glm::dvec3 gain = xa * w;
       b_[e] += gain;
       if (direct) direct_[e] += float(Lum(ka * w));
@@ -352,7 +360,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     } else {  // divided since the column was computed: each leaf gains alike
       q = ~q;
       mesh_.LeavesUnder(e, &leaves_);
-      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_area_[size_t(e)]);
+      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_[size_t(e)].area);
       const glm::dvec3 gain = xa * w;
       const double var = noisy ? ShotNoise(Lum(gain), f, pixel(q)) : 0;
       const float first = direct ? float(Lum(ka * w)) : 0.0f;
@@ -362,13 +370,13 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
         if (direct) direct_[l] += first;
         if (noisy) noise_[l] += var;
         if (track_) Changed(l);
-        one_patch &= patch_of_[size_t(l)] == q;
+        one_patch &= elem_[size_t(l)].patch == q;
       }
       if (!one_patch) {  // and split since: each piece reflects its leaves' share
         for (int l : leaves_) {
-          const int32_t r = patch_of_[size_t(l)];
+          const int32_t r = elem_[size_t(l)].patch;
           if (patch_[r].fsum == 0) touched_.push_back(r);
-          patch_[r].fsum += f * (elem_area_[size_t(l)] / elem_area_[size_t(e)]);
+          patch_[r].fsum += f * (elem_[size_t(l)].area / elem_[size_t(e)].area);
         }
         continue;
       }
@@ -421,7 +429,7 @@ void Solver::TakeChanged(std::vector<int32_t>* out) {
   track_ = true;
   out->swap(changed_);
   changed_.clear();
-  for (int32_t e : *out) is_changed_[size_t(e)] = 0;
+  for (int32_t e : *out) elem_[size_t(e)].changed = 0;
 }
 
 void Solver::Divided(const std::vector<int32_t>& elems) {
@@ -538,11 +546,11 @@ void Solver::Split(int p) {
       stack.pop_back();
       const Element& el = mesh_.elems[size_t(e)];
       if (!el.IsLeaf()) {
-        patch_of_[size_t(e)] = ~q;
+        elem_[size_t(e)].patch = ~q;
         for (int k = 0; k < kChildren; ++k) stack.push_back(el.first_child + k);
         continue;
       }
-      patch_of_[size_t(e)] = q;
+      elem_[size_t(e)].patch = q;
       got[i] += glm::max(b_[size_t(e)] - face.emission, glm::dvec3(0.0)) * el.area;
     }
     total += got[i];
@@ -591,8 +599,7 @@ bool Solver::Restore(const SolverState& s, std::string* err) {
   }
   // The mesh was divided and split since the constructor: every element's
   // patch again, the patches' arrays for their count.
-  patch_of_.clear();
-  elem_area_.clear();
+  elem_.clear();
   Grow();
   PatchArrays();
   b_ = s.b;

@@ -16,6 +16,7 @@
 #include <glm/glm.hpp>
 
 #include "hemicube.h"
+#include "memory.h"
 #include "mesh.h"
 #include "shooters.h"
 
@@ -142,8 +143,8 @@ class Solver {
   double Bound(int p) const;  // per shooter, for queue_
   void Rebase();
   void Changed(int32_t e) {
-    if (!is_changed_[size_t(e)]) {
-      is_changed_[size_t(e)] = 1;
+    if (!elem_[size_t(e)].changed) {
+      elem_[size_t(e)].changed = 1;
       changed_.push_back(e);
     }
   }
@@ -151,13 +152,23 @@ class Solver {
   void CountDarkEmitters();
   void Grow();
   void PatchArrays();
+  void HugeArrays();
 
   const Mesh& mesh_;
   bool overshoot_;
   std::vector<int> leaves_;         // scratch for Shoot
   std::vector<glm::dvec3> b_;       // per element
-  std::vector<int32_t> patch_of_;   // per element, compact for Shoot
-  std::vector<double> elem_area_;   // per element, likewise: its Element's area
+  // Per element, what Shoot reads besides B, in one record: at 10^5
+  // elements and more a column's elements are sparse in arrays larger
+  // than the caches, and each array was a line to wait for (the three
+  // were 13 bytes an element).
+  struct ElemShot {
+    double area = 0;      // its Element's
+    int32_t patch = 0;    // its patch, ~patch when divided
+    uint8_t changed = 0;  // in changed_
+  };
+  static_assert(sizeof(ElemShot) == 16, "four a cache line");
+  std::vector<ElemShot, HugePageAllocator<ElemShot>> elem_;
   // Per patch, what Shoot reads and writes of each patch a column reaches,
   // in one cache line: at 10^5 patches and more the patches a shot
   // reaches are scattered over arrays larger than the caches, and each
@@ -169,10 +180,9 @@ class Solver {
     double fsum = 0;      // Σ F within one Shoot
   };
   static_assert(sizeof(PatchShot) == 64, "one cache line");
-  std::vector<PatchShot> patch_;
+  std::vector<PatchShot, HugePageAllocator<PatchShot>> patch_;
   std::vector<glm::dvec3> center_;  // per patch, for the noise's direction
   std::vector<int32_t> touched_;    // patches with fsum != 0
-  std::vector<uint8_t> is_changed_; // per element: in changed_
   std::vector<double> noise_;       // per element when tracked: variance of Lum(B)
   double pixel_ff_ = 0;             // a top-centre pixel's delta form factor; 0: no noise
   std::vector<double> pixel_df_;    // per patch: its pixels' in this shot's direction
