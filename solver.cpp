@@ -100,9 +100,9 @@ void Solver::PatchArrays() {
 
 void Solver::NewWave() {
   Grow();
-  for (size_t e = 0; e < b_.size(); ++e) b_[e] = mesh_.FaceOf(int(e)).emission;
-  if (pixel_ff_ > 0) noise_.assign(b_.size(), 0.0);
-  if (track_direct_) direct_.assign(b_.size(), 0.0f);
+  for (size_t e = 0; e < elem_.size(); ++e) elem_[e].b = mesh_.FaceOf(int(e)).emission;
+  if (pixel_ff_ > 0) noise_.assign(elem_.size(), 0.0);
+  if (track_direct_) direct_.assign(elem_.size(), 0.0f);
   patch_.resize(mesh_.patches.size());
   lit_.resize(mesh_.patches.size());
   for (size_t p = 0; p < patch_.size(); ++p) {
@@ -132,26 +132,26 @@ void Solver::CountDarkEmitters() {
 // element's patch is stored complemented so that Shoot tells it apart
 // from a leaf without touching the Element.
 void Solver::Grow() {
-  const size_t from = elem_.size(), n = mesh_.elems.size();
-  b_.resize(n);
+  const size_t from = patch_of_.size(), n = mesh_.elems.size();
   elem_.resize(n);
+  patch_of_.resize(n);
+  is_changed_.resize(n, 0);
   if (pixel_ff_ > 0) noise_.resize(n, 0.0);
   if (track_direct_) direct_.resize(n, 0.0f);
   // Only added elements and their parents (divided since): O(divisions).
   for (size_t e = from; e < n; ++e) {
     const Element& el = mesh_.elems[e];
-    elem_[e].patch = el.IsLeaf() ? el.patch : ~el.patch;
+    patch_of_[e] = el.IsLeaf() ? el.patch : ~el.patch;
     elem_[e].area = el.area;
-    if (el.parent >= 0 && size_t(el.parent) < from) elem_[size_t(el.parent)].patch = ~el.patch;
+    if (el.parent >= 0 && size_t(el.parent) < from) patch_of_[size_t(el.parent)] = ~el.patch;
   }
   HugeArrays();
 }
 
 // What Shoot reads at a column's elements, scattered over arrays of 10^5
-// entries and more, in 2 MB pages (memory.h); elem_ and patch_ are
-// allocated so, these are handed out as std::vector.
+// entries and more, in 2 MB pages (memory.h); elem_, patch_of_ and
+// patch_ are allocated so, these are handed out as std::vector.
 void Solver::HugeArrays() {
-  PreferHugePages(b_.data(), b_.size() * sizeof b_[0]);
   PreferHugePages(noise_.data(), noise_.size() * sizeof(double));
   PreferHugePages(direct_.data(), direct_.size() * sizeof(float));
 }
@@ -160,14 +160,14 @@ void Solver::TrackNoise(int resolution) {
   // The top face spans 2 × 2 at unit height: a pixel (2/R)² there, at its
   // centre, has delta form factor (2/R)² / π.
   pixel_ff_ = 4 / (M_PI * double(resolution) * resolution);
-  noise_.resize(b_.size(), 0.0);
+  noise_.resize(elem_.size(), 0.0);
   pixel_df_.resize(mesh_.patches.size());
   HugeArrays();
 }
 
 void Solver::TrackDirect() {
   track_direct_ = true;
-  direct_.resize(b_.size(), 0.0f);
+  direct_.resize(elem_.size(), 0.0f);
   HugeArrays();
 }
 
@@ -308,7 +308,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   // share one ρ it is enough to sum F per patch here (the master's
   // per-shot cost bounds the speedup, paper graph 2).
   // Ids increase along a column: the last is the largest.
-  CHECK(column.empty() || size_t(column.back().elem) < elem_.size());
+  CHECK(column.empty() || size_t(column.back().elem) < patch_of_.size());
   // At 10^5 elements and more the arrays are far larger than the caches
   // and a column's elements are sparse in them: each element would wait
   // for memory (~100 ns). Fetched kAhead elements early, it does not.
@@ -333,27 +333,27 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     return pixel_df_[size_t(q)];
   };
   // Its patch's record (ρ, Σ F: one line) is fetched kAhead early too,
-  // from its patch id fetched 2 kAhead early with its area.
+  // from its patch id fetched 2 kAhead early.
   for (size_t i = 0; i < n; ++i) {
-    if (i + 2 * kAhead < n) __builtin_prefetch(&elem_[size_t(col[i + 2 * kAhead].elem)]);
+    if (i + 2 * kAhead < n) __builtin_prefetch(&patch_of_[size_t(col[i + 2 * kAhead].elem)]);
     if (i + kAhead < n) {
       const int32_t a = col[i + kAhead].elem;
-      __builtin_prefetch(&b_[size_t(a)], 1);
-      const int32_t qa = elem_[size_t(a)].patch;
+      __builtin_prefetch(&elem_[size_t(a)], 1);
+      const int32_t qa = patch_of_[size_t(a)];
       if (qa >= 0) __builtin_prefetch(&patch_[size_t(qa)], 1);
       if (noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
     }
     const int32_t e = col[i].elem;
-    int32_t q = elem_[e].patch;
+    int32_t q = patch_of_[e];
     const double f = double(col[i].f);
     // ρ/A from the patch's ρ and the element's area here rather than a
     // copy per element (24 bytes an element): the same division, so the
-    // same bits. The area is the solver's copy (elem_), not the 56-byte
-    // Element a cache line each.
+    // same bits. The area is the solver's copy beside B (elem_), not the
+    // 56-byte Element a cache line each.
     if (q >= 0) {
       const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_[size_t(e)].area);
       const glm::dvec3 gain = xa * w;
-      b_[e] += gain;
+      elem_[e].b += gain;
       if (direct) direct_[e] += float(Lum(ka * w));
       if (noisy) noise_[e] += ShotNoise(Lum(gain), f, pixel(q));
       if (track_) Changed(e);
@@ -366,15 +366,15 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
       const float first = direct ? float(Lum(ka * w)) : 0.0f;
       bool one_patch = true;
       for (int l : leaves_) {
-        b_[l] += gain;
+        elem_[l].b += gain;
         if (direct) direct_[l] += first;
         if (noisy) noise_[l] += var;
         if (track_) Changed(l);
-        one_patch &= elem_[size_t(l)].patch == q;
+        one_patch &= patch_of_[size_t(l)] == q;
       }
       if (!one_patch) {  // and split since: each piece reflects its leaves' share
         for (int l : leaves_) {
-          const int32_t r = elem_[size_t(l)].patch;
+          const int32_t r = patch_of_[size_t(l)];
           if (patch_[r].fsum == 0) touched_.push_back(r);
           patch_[r].fsum += f * (elem_[size_t(l)].area / elem_[size_t(e)].area);
         }
@@ -429,14 +429,14 @@ void Solver::TakeChanged(std::vector<int32_t>* out) {
   track_ = true;
   out->swap(changed_);
   changed_.clear();
-  for (int32_t e : *out) elem_[size_t(e)].changed = 0;
+  for (int32_t e : *out) is_changed_[size_t(e)] = 0;
 }
 
 void Solver::Divided(const std::vector<int32_t>& elems) {
   Grow();
   for (int32_t p : elems)
     for (int k = 0; k < kChildren; ++k) {
-      b_[mesh_.elems[p].first_child + k] = b_[p];
+      elem_[mesh_.elems[p].first_child + k].b = elem_[p].b;
       // What they have is the parent's, and so is its error.
       if (pixel_ff_ > 0) noise_[mesh_.elems[p].first_child + k] = noise_[p];
       if (track_direct_) direct_[mesh_.elems[p].first_child + k] = direct_[p];
@@ -449,7 +449,7 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
   for (size_t i = 0; i < elems.size(); ++i) {
     const int p = elems[i];
     const Element& pe = mesh_.elems[p];
-    const glm::dvec3 bp = b_[p];
+    const glm::dvec3 bp = elem_[p].b;
     // The parent's neighbours: its children's, less their siblings.
     around.clear();
     for (int k = 0; k < kChildren; ++k) {
@@ -482,10 +482,10 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
       m11 += dx * dx;
       m12 += dx * dy;
       m22 += dy * dy;
-      r1 += dx * (b_[n] - bp);
-      r2 += dy * (b_[n] - bp);
-      lo = glm::min(lo, b_[n]);
-      hi = glm::max(hi, b_[n]);
+      r1 += dx * (elem_[n].b - bp);
+      r2 += dy * (elem_[n].b - bp);
+      lo = glm::min(lo, elem_[n].b);
+      hi = glm::max(hi, elem_[n].b);
     }
     const double damp = 1e-3 * (m11 + m22);
     m11 += damp;
@@ -511,7 +511,7 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
   }
   for (size_t i = 0; i < elems.size(); ++i)
     for (int k = 0; k < kChildren; ++k)
-      b_[mesh_.elems[elems[i]].first_child + k] = shaped[kChildren * i + k];
+      elem_[mesh_.elems[elems[i]].first_child + k].b = shaped[kChildren * i + k];
 }
 
 void Solver::Split(int p) {
@@ -546,12 +546,12 @@ void Solver::Split(int p) {
       stack.pop_back();
       const Element& el = mesh_.elems[size_t(e)];
       if (!el.IsLeaf()) {
-        elem_[size_t(e)].patch = ~q;
+        patch_of_[size_t(e)] = ~q;
         for (int k = 0; k < kChildren; ++k) stack.push_back(el.first_child + k);
         continue;
       }
-      elem_[size_t(e)].patch = q;
-      got[i] += glm::max(b_[size_t(e)] - face.emission, glm::dvec3(0.0)) * el.area;
+      patch_of_[size_t(e)] = q;
+      got[i] += glm::max(elem_[size_t(e)].b - face.emission, glm::dvec3(0.0)) * el.area;
     }
     total += got[i];
   }
@@ -573,7 +573,7 @@ void Solver::Split(int p) {
 
 SolverState Solver::State() const {
   SolverState s;
-  s.b = b_;
+  s.b = radiosity();
   s.unshot = unshot();
   s.lit = lit_;
   s.blind = blind_;
@@ -599,17 +599,17 @@ bool Solver::Restore(const SolverState& s, std::string* err) {
   }
   // The mesh was divided and split since the constructor: every element's
   // patch again, the patches' arrays for their count.
-  elem_.clear();
+  patch_of_.clear();
   Grow();
   PatchArrays();
-  b_ = s.b;
+  for (size_t e = 0; e < elem_.size(); ++e) elem_[e].b = s.b[e];
   for (size_t p = 0; p < np; ++p) patch_[p].unshot = s.unshot[p];
   lit_ = s.lit;
   blind_ = s.blind;
   times_shot_.assign(s.times_shot.begin(), s.times_shot.end());
   noise_ = s.noise;
   direct_ = s.direct;
-  if (track_direct_) direct_.resize(b_.size(), 0.0f);
+  if (track_direct_) direct_.resize(elem_.size(), 0.0f);
   unshot_sum_ = s.unshot_sum;
   abs_sum_ = s.abs_sum;
   shots_ = s.shots;
@@ -626,7 +626,9 @@ double Solver::UnshotFraction() const {
 double Solver::PowerRatio() const {
   if (emitted_ == 0) return 0;
   double s = 0;
-  for (size_t e = 0; e < b_.size(); ++e)
-    if (mesh_.elems[e].IsLeaf()) s += (b_[e].r + b_[e].g + b_[e].b) * mesh_.elems[e].area;
+  for (size_t e = 0; e < elem_.size(); ++e) {
+    const glm::dvec3& b = elem_[e].b;
+    if (mesh_.elems[e].IsLeaf()) s += (b.r + b.g + b.b) * mesh_.elems[e].area;
+  }
   return s / emitted_;
 }

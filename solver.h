@@ -15,6 +15,7 @@
 
 #include <glm/glm.hpp>
 
+#include "elemb.h"
 #include "hemicube.h"
 #include "memory.h"
 #include "mesh.h"
@@ -126,7 +127,9 @@ class Solver {
   long shots() const { return shots_; }
   int TimesShot(int p) const { return times_shot_[p]; }
   const std::vector<int>& times_shot() const { return times_shot_; } // per patch, this wave
-  const std::vector<glm::dvec3>& radiosity() const { return b_; }  // per element
+  ElemB radiosity() const {  // per element
+    return ElemB(reinterpret_cast<const glm::dvec3*>(elem_.data()), elem_.size(), sizeof(ElemShot));
+  }
   std::vector<glm::dvec3> unshot() const;  // per patch, a copy (State, tests)
   glm::dvec3 Ambient() const;  // the overshooting estimate before ρ
 
@@ -143,8 +146,8 @@ class Solver {
   double Bound(int p) const;  // per shooter, for queue_
   void Rebase();
   void Changed(int32_t e) {
-    if (!elem_[size_t(e)].changed) {
-      elem_[size_t(e)].changed = 1;
+    if (!is_changed_[size_t(e)]) {
+      is_changed_[size_t(e)] = 1;
       changed_.push_back(e);
     }
   }
@@ -157,18 +160,17 @@ class Solver {
   const Mesh& mesh_;
   bool overshoot_;
   std::vector<int> leaves_;         // scratch for Shoot
-  std::vector<glm::dvec3> b_;       // per element
-  // Per element, what Shoot reads besides B, in one record: at 10^5
-  // elements and more a column's elements are sparse in arrays larger
-  // than the caches, and each array was a line to wait for (the three
-  // were 13 bytes an element).
+  // Per element, its B and its Element's area together: at 10^5 elements
+  // and more a column's elements are sparse in arrays larger than the
+  // caches, and B and the area in two arrays were two lines to wait for
+  // (radiosity() hands B out as a view of these).
   struct ElemShot {
-    double area = 0;      // its Element's
-    int32_t patch = 0;    // its patch, ~patch when divided
-    uint8_t changed = 0;  // in changed_
+    glm::dvec3 b{0.0};
+    double area = 0;
   };
-  static_assert(sizeof(ElemShot) == 16, "four a cache line");
+  static_assert(sizeof(ElemShot) == 32, "two a cache line, none across two");
   std::vector<ElemShot, HugePageAllocator<ElemShot>> elem_;
+  std::vector<int32_t, HugePageAllocator<int32_t>> patch_of_;  // per element; ~patch when divided
   // Per patch, what Shoot reads and writes of each patch a column reaches,
   // in one cache line: at 10^5 patches and more the patches a shot
   // reaches are scattered over arrays larger than the caches, and each
@@ -183,6 +185,7 @@ class Solver {
   std::vector<PatchShot, HugePageAllocator<PatchShot>> patch_;
   std::vector<glm::dvec3> center_;  // per patch, for the noise's direction
   std::vector<int32_t> touched_;    // patches with fsum != 0
+  std::vector<uint8_t> is_changed_; // per element: in changed_
   std::vector<double> noise_;       // per element when tracked: variance of Lum(B)
   double pixel_ff_ = 0;             // a top-centre pixel's delta form factor; 0: no noise
   std::vector<double> pixel_df_;    // per patch: its pixels' in this shot's direction
