@@ -66,10 +66,11 @@ void PreferHugePages(const void* p, size_t bytes) {
 }
 
 void* AllocateHuge(size_t bytes) {
-  const size_t align = bytes < kHuge ? 64 : kHuge;
-  const size_t whole = (bytes + align - 1) & ~(align - 1);
-  void* p = std::aligned_alloc(align, std::max(whole, align));
-  if (!p) throw std::bad_alloc();
-  if (align == kHuge) madvise(p, whole, MADV_HUGEPAGE);  // before the first touch: faulted in huge
+  void* p = nullptr;
+  if (posix_memalign(&p, bytes < kHuge ? 64 : kHuge, std::max<size_t>(bytes, 1)) != 0)
+    throw std::bad_alloc();
+  // Before the first touch, so that the whole 2 MB pages are faulted in
+  // huge; the tail stays in small pages (no more resident than asked).
+  if (bytes >= kHuge) madvise(p, bytes & ~(kHuge - 1), MADV_HUGEPAGE);
   return p;
 }

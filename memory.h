@@ -37,9 +37,9 @@ bool FitsInMemory(double elements, double bytes_per_element, double usable, std:
 // PreferHugePages: the whole 2 MB pages inside [p, p + bytes), for an
 // array allocated elsewhere; the bytes stay as they are.
 void PreferHugePages(const void* p, size_t bytes);
-// Storage of `bytes` aligned to 64: 2 MB pages from the start, whole
-// ones, when it is 2 MB and more (less than 2 MB more resident for
-// each); freed by std::free.
+// Storage of `bytes` aligned to 64: in 2 MB pages from the start when it
+// is 2 MB and more (its last part less than 2 MB in small pages, so
+// nothing more is resident); freed by std::free.
 void* AllocateHuge(size_t bytes);
 template <class T>
 struct HugePageAllocator {
