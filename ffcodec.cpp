@@ -169,11 +169,11 @@ void PutFormFactors(const std::vector<FormFactor>& ff, std::string* out) {
   }
 }
 
-// The hot path: tight loops over the bytes, one allocation, no
-// strings unless it fails. The runs are checked first without writing
-// anything; then, in the usual case of a column without escapes (exactly 2
-// bytes per form factor left), ids and form factors are written in one
-// pass. Columns with escapes, and every error, take the general path.
+// The hot path: tight loops over the bytes, one allocation, no strings
+// unless it fails. One pass over the runs checks them and writes their
+// ids; then, in the usual case of a column without escapes (exactly 2
+// bytes per form factor left), one pass over the codes. Columns with
+// escapes, and every error, take the general path for the codes.
 bool GetFormFactors(Reader* r, std::vector<FormFactor>* out_ff) {
   uint64_t n, runs;
   if (!r->Count(2, &n, "form factor count")) return false;
@@ -187,7 +187,16 @@ bool GetFormFactors(Reader* r, std::vector<FormFactor>* out_ff) {
   const uint8_t* const runs_at = base + r->pos();
   auto at = [&](const uint8_t* q) { return std::to_string(q - base); };
 
-  // Runs: (gap, length - 1) each; checked, nothing written.
+  // A run's ids are written kShort at a time whatever its length (most
+  // runs are a patch's few elements): a loop of the run's length would
+  // mispredict its exit at nearly every run. What is written past the
+  // run is overwritten by the next run's ids, or lies in the kShort - 1
+  // entries of scratch past the n form factors.
+  constexpr size_t kShort = 8;
+  out_ff->resize(size_t(n) + kShort - 1);
+  FormFactor* const ff = out_ff->data();
+
+  // Runs: (gap, length - 1) each; checked, and their ids written.
   const uint8_t* p = runs_at;
   uint64_t next = 0;  // one past the previous run's last id
   uint64_t filled = 0;
@@ -213,11 +222,15 @@ bool GetFormFactors(Reader* r, std::vector<FormFactor>* out_ff) {
       return r->Fail("run " + std::to_string(k) + " at offset " + at(gap_at) + " makes " +
                      std::to_string(filled + len) + " ids, more than the " + std::to_string(n) +
                      " form factors");
+    const uint32_t id = uint32_t(next + gap);
     next += gap + len;
     if (next - 1 > uint64_t(INT32_MAX))
       return r->Fail("run " + std::to_string(k) + " at offset " + at(gap_at) + ": element id " +
                      std::to_string(next - 1) + " is out of range (max " +
                      std::to_string(INT32_MAX) + ")");
+    FormFactor* const out = ff + filled;
+    for (uint32_t j = 0; j < kShort; ++j) out[j].elem = int32_t(id + j);
+    for (uint32_t j = kShort; j < len; ++j) out[j].elem = int32_t(id + j);
     filled += len;
   }
   if (filled != n)
@@ -228,27 +241,17 @@ bool GetFormFactors(Reader* r, std::vector<FormFactor>* out_ff) {
     return r->Fail("truncated: " + std::to_string(n) + " form factors need at least " +
                    std::to_string(2 * n) + " bytes at offset " + at(codes_at) + ", " +
                    std::to_string(end - codes_at) + " left");
-
   out_ff->resize(size_t(n));
-  FormFactor* const ff = out_ff->data();
+
   if (uint64_t(end - codes_at) == 2 * n) {
     // No room for an escape: one pass. A code 0 (an escape without its 3
     // bytes) is noted and reported by the general path.
-    const uint8_t* q = runs_at;
-    const uint8_t* pc = codes_at;
-    FormFactor* out = ff;
     uint32_t any_zero = 0;  // bit 31 set by code 0 (0 - 1)
-    uint32_t id = 0;
-    for (uint64_t k = 0; k < runs; ++k) {
-      id += uint32_t(GetCheckedVarint(&q));
-      const uint32_t stop = id + uint32_t(GetCheckedVarint(&q)) + 1;  // <= 2^31
-      for (; id != stop; ++id, ++out, pc += 2) {
-        const uint32_t code = uint32_t(pc[0]) | uint32_t(pc[1]) << 8;
-        any_zero |= code - 1;
-        const uint32_t bits = F16FloatBits(code);
-        out->elem = int32_t(id);
-        std::memcpy(&out->f, &bits, 4);
-      }
+    for (size_t i = 0; i < n; ++i) {
+      const uint32_t code = uint32_t(codes_at[2 * i]) | uint32_t(codes_at[2 * i + 1]) << 8;
+      any_zero |= code - 1;
+      const uint32_t bits = F16FloatBits(code);
+      std::memcpy(&ff[i].f, &bits, 4);
     }
     if (!(any_zero >> 31)) {
       r->Seek(size_t(end - base));
@@ -256,20 +259,7 @@ bool GetFormFactors(Reader* r, std::vector<FormFactor>* out_ff) {
     }
   }
 
-  // The general path: ids, then form factors with escapes, every byte
-  // checked.
-  p = runs_at;
-  {
-    uint32_t id = 0;
-    FormFactor* out = ff;
-    for (uint64_t k = 0; k < runs; ++k) {
-      id += uint32_t(GetCheckedVarint(&p));
-      const uint32_t len = uint32_t(GetCheckedVarint(&p)) + 1;
-      for (uint32_t j = 0; j < len; ++j) out[j].elem = int32_t(id + j);
-      out += len;
-      id += len;
-    }
-  }
+  // The general path: form factors with escapes, every byte checked.
   p = codes_at;
   for (size_t i = 0; i < n;) {
     // Up to the next escape no bounds check is needed: the bytes left hold

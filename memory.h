@@ -8,6 +8,8 @@
 #ifndef RADIOSITY_MEMORY_H
 #define RADIOSITY_MEMORY_H
 
+#include <cstddef>
+#include <cstdlib>
 #include <string>
 
 // The master: mesh, solver, subdivision's adjacency, the hemicube (-j 0)
@@ -27,5 +29,32 @@ double UsableMemory();
 // False with *err (one line, no prefix) when `elements` elements at
 // `bytes_per_element` would not fit in `usable` bytes.
 bool FitsInMemory(double elements, double bytes_per_element, double usable, std::string* err);
+
+// Arrays read at scattered places and larger than the TLB reaches with
+// 4 KB pages (the solver's per element and per patch, at 10^5 of them
+// and more) wait on a page walk per access; backed by 2 MB pages where
+// the kernel has them (transparent huge pages not off), they do not.
+//
+// PreferHugePages: the whole 2 MB pages inside [p, p + bytes), for an
+// array allocated elsewhere; the bytes stay as they are.
+void PreferHugePages(const void* p, size_t bytes);
+// Storage of `bytes` aligned to 64: in 2 MB pages from the start when it
+// is 2 MB and more (its last part less than 2 MB in small pages, so
+// nothing more is resident); freed by std::free.
+void* AllocateHuge(size_t bytes);
+template <class T>
+struct HugePageAllocator {
+  typedef T value_type;
+  HugePageAllocator() = default;
+  template <class U>
+  HugePageAllocator(const HugePageAllocator<U>&) {}
+  static_assert(alignof(T) <= 64, "AllocateHuge aligns to 64");
+  T* allocate(size_t n) { return static_cast<T*>(AllocateHuge(n * sizeof(T))); }
+  void deallocate(T* p, size_t) { std::free(p); }
+  template <class U>
+  bool operator==(const HugePageAllocator<U>&) const { return true; }
+  template <class U>
+  bool operator!=(const HugePageAllocator<U>&) const { return false; }
+};
 
 #endif

@@ -19,7 +19,7 @@ namespace {
 
 // Radiosity times area, and area, of the parts of leaves under element
 // `e` that lie inside input face `clip` (in the surface's plane frame).
-void Cover(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const PlaneFrame& frame,
+void Cover(const Mesh& mesh, const ElemB& elem_b, const PlaneFrame& frame,
            const std::vector<glm::dvec2>& clip, int e, glm::dvec3* sum, double* area) {
   const Element& el = mesh.elems[e];
   std::vector<glm::dvec2> poly;
@@ -41,7 +41,7 @@ void Cover(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const PlaneF
 
 }  // namespace
 
-std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
+std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const ElemB& elem_b) {
   std::vector<glm::dvec3> out(mesh.corner_begin.size() - 1, glm::dvec3(0.0));
   std::vector<int> leaves;
   for (const MeshFace& mf : mesh.faces) {
@@ -272,7 +272,7 @@ bool LogCsv::Close(std::string* err) {
   return true;
 }
 
-ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b) {
+ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
   ShadedMesh s;
   s.lent = &mesh.verts;
   std::vector<int> t_leaves;  // leaves with T-vertices on their edges
@@ -492,8 +492,8 @@ glm::dvec3 Drawn(const Mesh& mesh, const ShadedMesh& shaded, int e, const glm::d
 
 }  // namespace
 
-void FieldError(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const Mesh& ref,
-                const std::vector<glm::dvec3>& ref_b, double* rms, double* rel_rms) {
+void FieldError(const Mesh& mesh, const ElemB& elem_b, const Mesh& ref,
+                const ElemB& ref_b, double* rms, double* rel_rms) {
   CHECK(mesh.faces.size() == ref.faces.size());
   const ShadedMesh shaded = Shade(mesh, elem_b), ref_shaded = Shade(ref, ref_b);
   const double tol = 1e-12 * mesh.scene_diagonal * mesh.scene_diagonal;

@@ -9,6 +9,7 @@
 
 #include <glm/glm.hpp>
 
+#include "elemb.h"
 #include "image.h"
 #include "scheduler.h"
 #include "mesh.h"
@@ -17,7 +18,7 @@
 // Per scene face: the area-weighted mean radiosity of the leaf elements
 // over it (on a joined surface, each leaf weighted by its exact overlap
 // with the face), negative rounding residue clamped to 0.
-std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b);
+std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const ElemB& elem_b);
 
 // result.csv: `face,object,area,B_r,B_g,B_b`, one row per accepted face.
 bool WriteResultCsv(const std::string& path, const Scene& scene,
@@ -40,8 +41,8 @@ void RmsError(const Scene& scene, const std::vector<glm::dvec3>& face_b,
 // size), the radiosity as drawn (Shade, interpolated over the leaf's
 // triangles as Render does) against the reference as drawn, weighted by
 // the leaf's area.
-void FieldError(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b, const Mesh& ref,
-                const std::vector<glm::dvec3>& ref_b, double* rms, double* rel_rms);
+void FieldError(const Mesh& mesh, const ElemB& elem_b, const Mesh& ref,
+                const ElemB& ref_b, double* rms, double* rel_rms);
 
 // One row of log.csv; rms and rel_rms are NaN without a reference.
 struct LogRow {
@@ -76,6 +77,6 @@ class LogCsv {
 
 // Leaf elements with radiosity averaged to their vertices (inside one face;
 // faces do not share vertices), ready to draw or export.
-ShadedMesh Shade(const Mesh& mesh, const std::vector<glm::dvec3>& elem_b);
+ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b);
 
 #endif

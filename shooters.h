@@ -30,6 +30,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "memory.h"
+
 class ShooterQueue {
  public:
   // Every bound set at once (-inf or NaN: never chosen), with each
@@ -77,8 +79,9 @@ class ShooterQueue {
   // Node 1 is the root, node k's children are 2k and 2k+1, shooter i is
   // leaf leaves_ + i (the leaves past n hold -inf). A node holds the
   // greatest bound of the untaken shooters under it.
-  std::vector<double> tree_;
-  std::vector<double> weight_;  // the same tree of the weights (taken or not)
+  // In 2 MB pages (memory.h): a shot sets leaves scattered over them.
+  std::vector<double, HugePageAllocator<double>> tree_;
+  std::vector<double, HugePageAllocator<double>> weight_;  // the same tree of the weights (taken or not)
   // Per shooter, its bound while it is taken (an untaken one's is its
   // leaf): Set writes one array, not two, for the shooters a shot reaches.
   std::vector<double> bound_;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 #include "check.h"
 #include "groups.h"
@@ -101,9 +102,9 @@ void Solver::PatchArrays() {
 
 void Solver::NewWave() {
   Grow();
-  for (size_t e = 0; e < b_.size(); ++e) b_[e] = mesh_.Emission(mesh_.FaceOf(int(e)));
-  if (pixel_ff_ > 0) noise_.assign(b_.size(), 0.0);
-  if (track_direct_) direct_.assign(b_.size(), 0.0f);
+  for (size_t e = 0; e < elem_.size(); ++e) elem_[e].b = mesh_.Emission(mesh_.FaceOf(int(e)));
+  if (pixel_ff_ > 0) noise_.assign(elem_.size(), 0.0);
+  if (track_direct_) direct_.assign(elem_.size(), 0.0f);
   patch_.resize(mesh_.patches.size());
   lit_.resize(mesh_.patches.size());
   for (size_t p = 0; p < patch_.size(); ++p) {
@@ -134,9 +135,8 @@ void Solver::CountDarkEmitters() {
 // from a leaf without touching the Element.
 void Solver::Grow() {
   const size_t from = patch_of_.size(), n = mesh_.elems.size();
-  b_.resize(n);
+  elem_.resize(n);
   patch_of_.resize(n);
-  elem_area_.resize(n);
   is_changed_.resize(n, 0);
   if (pixel_ff_ > 0) noise_.resize(n, 0.0);
   if (track_direct_) direct_.resize(n, 0.0f);
@@ -144,22 +144,33 @@ void Solver::Grow() {
   for (size_t e = from; e < n; ++e) {
     const Element& el = mesh_.elems[e];
     patch_of_[e] = el.IsLeaf() ? el.patch : ~el.patch;
-    elem_area_[e] = el.area;
+    elem_[e].area = el.area;
     if (el.parent >= 0 && size_t(el.parent) < from) patch_of_[size_t(el.parent)] = ~el.patch;
   }
+  HugeArrays();
+}
+
+// What Shoot reads at a column's elements, scattered over arrays of 10^5
+// entries and more, in 2 MB pages (memory.h); elem_, patch_of_ and
+// patch_ are allocated so, these are handed out as std::vector.
+void Solver::HugeArrays() {
+  PreferHugePages(noise_.data(), noise_.size() * sizeof(double));
+  PreferHugePages(direct_.data(), direct_.size() * sizeof(float));
 }
 
 void Solver::TrackNoise(int resolution) {
   // The top face spans 2 × 2 at unit height: a pixel (2/R)² there, at its
   // centre, has delta form factor (2/R)² / π.
   pixel_ff_ = 4 / (M_PI * double(resolution) * resolution);
-  noise_.resize(b_.size(), 0.0);
+  noise_.resize(elem_.size(), 0.0);
   pixel_df_.resize(mesh_.patches.size());
+  HugeArrays();
 }
 
 void Solver::TrackDirect() {
   track_direct_ = true;
-  direct_.resize(b_.size(), 0.0f);
+  direct_.resize(elem_.size(), 0.0f);
+  HugeArrays();
 }
 
 void Solver::Resum() {
@@ -329,8 +340,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     if (i + 2 * kAhead < n) __builtin_prefetch(&patch_of_[size_t(col[i + 2 * kAhead].elem)]);
     if (i + kAhead < n) {
       const int32_t a = col[i + kAhead].elem;
-      __builtin_prefetch(&b_[size_t(a)], 1);
-      __builtin_prefetch(&elem_area_[size_t(a)]);
+      __builtin_prefetch(&elem_[size_t(a)], 1);
       const int32_t qa = patch_of_[size_t(a)];
       if (qa >= 0) __builtin_prefetch(&patch_[size_t(qa)], 1);
       if (noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
@@ -340,26 +350,25 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     const double f = double(col[i].f);
     // ρ/A from the patch's ρ and the element's area here rather than a
     // copy per element (24 bytes an element): the same division, so the
-    // same bits. The area is the solver's copy (elem_area_, 8 bytes an
-    // element): two dense arrays read in id order, not a 56-byte Element
-    // a cache line each.
+    // same bits. The area is the solver's copy beside B (elem_), not the
+    // 56-byte Element a cache line each.
     if (q >= 0) {
-      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_area_[size_t(e)]);
+      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_[size_t(e)].area);
       const glm::dvec3 gain = xa * w;
-      b_[e] += gain;
+      elem_[e].b += gain;
       if (direct) direct_[e] += float(Lum(ka * w));
       if (noisy) noise_[e] += ShotNoise(Lum(gain), f, pixel(q));
       if (track_) Changed(e);
     } else {  // divided since the column was computed: each leaf gains alike
       q = ~q;
       mesh_.LeavesUnder(e, &leaves_);
-      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_area_[size_t(e)]);
+      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_[size_t(e)].area);
       const glm::dvec3 gain = xa * w;
       const double var = noisy ? ShotNoise(Lum(gain), f, pixel(q)) : 0;
       const float first = direct ? float(Lum(ka * w)) : 0.0f;
       bool one_patch = true;
       for (int l : leaves_) {
-        b_[l] += gain;
+        elem_[l].b += gain;
         if (direct) direct_[l] += first;
         if (noisy) noise_[l] += var;
         if (track_) Changed(l);
@@ -369,7 +378,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
         for (int l : leaves_) {
           const int32_t r = patch_of_[size_t(l)];
           if (patch_[r].fsum == 0) touched_.push_back(r);
-          patch_[r].fsum += f * (elem_area_[size_t(l)] / elem_area_[size_t(e)]);
+          patch_[r].fsum += f * (elem_[size_t(l)].area / elem_[size_t(e)].area);
         }
         continue;
       }
@@ -429,7 +438,7 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
   Grow();
   for (int32_t p : elems)
     for (int k = 0; k < kChildren; ++k) {
-      b_[mesh_.elems[p].first_child + k] = b_[p];
+      elem_[mesh_.elems[p].first_child + k].b = elem_[p].b;
       // What they have is the parent's, and so is its error.
       if (pixel_ff_ > 0) noise_[mesh_.elems[p].first_child + k] = noise_[p];
       if (track_direct_) direct_[mesh_.elems[p].first_child + k] = direct_[p];
@@ -442,7 +451,7 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
   for (size_t i = 0; i < elems.size(); ++i) {
     const int p = elems[i];
     const Element& pe = mesh_.elems[p];
-    const glm::dvec3 bp = b_[p];
+    const glm::dvec3 bp = elem_[p].b;
     // The parent's neighbours: its children's, less their siblings.
     around.clear();
     for (int k = 0; k < kChildren; ++k) {
@@ -475,10 +484,10 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
       m11 += dx * dx;
       m12 += dx * dy;
       m22 += dy * dy;
-      r1 += dx * (b_[n] - bp);
-      r2 += dy * (b_[n] - bp);
-      lo = glm::min(lo, b_[n]);
-      hi = glm::max(hi, b_[n]);
+      r1 += dx * (elem_[n].b - bp);
+      r2 += dy * (elem_[n].b - bp);
+      lo = glm::min(lo, elem_[n].b);
+      hi = glm::max(hi, elem_[n].b);
     }
     const double damp = 1e-3 * (m11 + m22);
     m11 += damp;
@@ -504,7 +513,7 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
   }
   for (size_t i = 0; i < elems.size(); ++i)
     for (int k = 0; k < kChildren; ++k)
-      b_[mesh_.elems[elems[i]].first_child + k] = shaped[kChildren * i + k];
+      elem_[mesh_.elems[elems[i]].first_child + k].b = shaped[kChildren * i + k];
 }
 
 void Solver::Split(int p) {
@@ -545,7 +554,7 @@ void Solver::Split(int p) {
         continue;
       }
       patch_of_[size_t(e)] = q;
-      got[i] += glm::max(b_[size_t(e)] - ke, glm::dvec3(0.0)) * el.area;
+      got[i] += glm::max(elem_[size_t(e)].b - ke, glm::dvec3(0.0)) * el.area;
     }
     total += got[i];
   }
@@ -565,9 +574,21 @@ void Solver::Split(int p) {
   Rebase();
 }
 
+std::vector<glm::dvec3> Solver::TakeRadiosity() {
+  // Swapped with empty ones, so that their memory goes now.
+  auto drop = [](auto& v) { std::remove_reference_t<decltype(v)>().swap(v); };
+  drop(patch_of_), drop(patch_), drop(center_), drop(touched_), drop(is_changed_);
+  drop(noise_), drop(pixel_df_), drop(direct_), drop(changed_), drop(lit_), drop(blind_);
+  drop(times_shot_), drop(weight_), drop(group_dirty_), drop(dirty_groups_), drop(leaves_);
+  queue_ = ShooterQueue();
+  std::vector<glm::dvec3> b = radiosity();
+  drop(elem_);
+  return b;
+}
+
 SolverState Solver::State() const {
   SolverState s;
-  s.b = b_;
+  s.b = radiosity();
   s.unshot = unshot();
   s.lit = lit_;
   s.blind = blind_;
@@ -594,17 +615,16 @@ bool Solver::Restore(const SolverState& s, std::string* err) {
   // The mesh was divided and split since the constructor: every element's
   // patch again, the patches' arrays for their count.
   patch_of_.clear();
-  elem_area_.clear();
   Grow();
   PatchArrays();
-  b_ = s.b;
+  for (size_t e = 0; e < elem_.size(); ++e) elem_[e].b = s.b[e];
   for (size_t p = 0; p < np; ++p) patch_[p].unshot = s.unshot[p];
   lit_ = s.lit;
   blind_ = s.blind;
   times_shot_.assign(s.times_shot.begin(), s.times_shot.end());
   noise_ = s.noise;
   direct_ = s.direct;
-  if (track_direct_) direct_.resize(b_.size(), 0.0f);
+  if (track_direct_) direct_.resize(elem_.size(), 0.0f);
   unshot_sum_ = s.unshot_sum;
   abs_sum_ = s.abs_sum;
   shots_ = s.shots;
@@ -621,7 +641,9 @@ double Solver::UnshotFraction() const {
 double Solver::PowerRatio() const {
   if (emitted_ == 0) return 0;
   double s = 0;
-  for (size_t e = 0; e < b_.size(); ++e)
-    if (mesh_.elems[e].IsLeaf()) s += (b_[e].r + b_[e].g + b_[e].b) * mesh_.elems[e].area;
+  for (size_t e = 0; e < elem_.size(); ++e) {
+    const glm::dvec3& b = elem_[e].b;
+    if (mesh_.elems[e].IsLeaf()) s += (b.r + b.g + b.b) * mesh_.elems[e].area;
+  }
   return s / emitted_;
 }

@@ -15,7 +15,9 @@
 
 #include <glm/glm.hpp>
 
+#include "elemb.h"
 #include "hemicube.h"
+#include "memory.h"
 #include "mesh.h"
 #include "shooters.h"
 
@@ -125,9 +127,14 @@ class Solver {
   long shots() const { return shots_; }
   int TimesShot(int p) const { return times_shot_[p]; }
   const std::vector<int>& times_shot() const { return times_shot_; } // per patch, this wave
-  const std::vector<glm::dvec3>& radiosity() const { return b_; }  // per element
-  // B moved out, for a caller done with the solver (no copy beside it).
-  std::vector<glm::dvec3> TakeRadiosity() { return std::move(b_); }
+  ElemB radiosity() const {  // per element
+    return ElemB(reinterpret_cast<const glm::dvec3*>(elem_.data()), elem_.size(), sizeof(ElemShot));
+  }
+  // B as a plain array, for a caller done with the solver: the solver's
+  // other arrays are freed first and the element records after the copy,
+  // so that the copy stands beside those alone (the master's peak at the
+  // end of a run). The solver is empty afterwards.
+  std::vector<glm::dvec3> TakeRadiosity();
   std::vector<glm::dvec3> unshot() const;  // per patch, a copy (State, tests)
   glm::dvec3 Ambient() const;  // the overshooting estimate before ρ
 
@@ -153,13 +160,22 @@ class Solver {
   void CountDarkEmitters();
   void Grow();
   void PatchArrays();
+  void HugeArrays();
 
   const Mesh& mesh_;
   bool overshoot_;
   std::vector<int> leaves_;         // scratch for Shoot
-  std::vector<glm::dvec3> b_;       // per element
-  std::vector<int32_t> patch_of_;   // per element, compact for Shoot
-  std::vector<double> elem_area_;   // per element, likewise: its Element's area
+  // Per element, its B and its Element's area together: at 10^5 elements
+  // and more a column's elements are sparse in arrays larger than the
+  // caches, and B and the area in two arrays were two lines to wait for
+  // (radiosity() hands B out as a view of these).
+  struct ElemShot {
+    glm::dvec3 b{0.0};
+    double area = 0;
+  };
+  static_assert(sizeof(ElemShot) == 32, "two a cache line, none across two");
+  std::vector<ElemShot, HugePageAllocator<ElemShot>> elem_;
+  std::vector<int32_t, HugePageAllocator<int32_t>> patch_of_;  // per element; ~patch when divided
   // Per patch, what Shoot reads and writes of each patch a column reaches,
   // in one cache line: at 10^5 patches and more the patches a shot
   // reaches are scattered over arrays larger than the caches, and each
@@ -171,7 +187,7 @@ class Solver {
     double fsum = 0;      // Σ F within one Shoot
   };
   static_assert(sizeof(PatchShot) == 64, "one cache line");
-  std::vector<PatchShot> patch_;
+  std::vector<PatchShot, HugePageAllocator<PatchShot>> patch_;
   std::vector<glm::dvec3> center_;  // per patch, for the noise's direction
   std::vector<int32_t> touched_;    // patches with fsum != 0
   std::vector<uint8_t> is_changed_; // per element: in changed_

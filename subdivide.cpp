@@ -103,7 +103,7 @@ double Subdivider::PassBound(int k, const glm::dvec3& ambient, double mean) cons
 // it can be with every luminance within its synced value's tolerance
 // (synced_, kDrift) and this scale's shared part; +inf where PassBound
 // does not hold (a term's s < 0, or no positive scale).
-double Subdivider::Factor(const Mesh& mesh, const std::vector<glm::dvec3>& b,
+double Subdivider::Factor(const Mesh& mesh, const ElemB& b,
                           const std::vector<double>& noise, const glm::dvec3& ambient,
                           double mean, int e, double* bound) {
   std::vector<int>& nb = nb_;
@@ -140,7 +140,7 @@ double Subdivider::Factor(const Mesh& mesh, const std::vector<glm::dvec3>& b,
   return factor;
 }
 
-std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
+std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const ElemB& b,
                                       const std::vector<double>& noise,
                                       const glm::dvec3& ambient, long shots,
                                       const std::vector<int32_t>& changed) {

@@ -81,6 +81,7 @@
 
 #include <glm/glm.hpp>
 
+#include "elemb.h"
 #include "mesh.h"
 
 struct SubdivideOptions {
@@ -160,7 +161,7 @@ class Subdivider {
   // neighbours): when over a quarter moved, the pass evaluates every leaf
   // instead. Needs the mesh's edges connected (ConnectEdges) for the
   // neighbour search.
-  std::vector<int32_t> Pass(const Mesh& mesh, const std::vector<glm::dvec3>& b,
+  std::vector<int32_t> Pass(const Mesh& mesh, const ElemB& b,
                             const std::vector<double>& noise, const glm::dvec3& ambient,
                             long shots, const std::vector<int32_t>& changed);
   // The patches to split after the pass just made (call it after Pass and
@@ -213,7 +214,7 @@ class Subdivider {
   void Restore(const SubdividerState& s);
 
  private:
-  double Factor(const Mesh& mesh, const std::vector<glm::dvec3>& b,
+  double Factor(const Mesh& mesh, const ElemB& b,
                 const std::vector<double>& noise, const glm::dvec3& ambient, double mean, int e,
                 double* bound);
   void Track(const Mesh& mesh);
