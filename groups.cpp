@@ -1,6 +1,7 @@
 #include "groups.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
 
@@ -24,13 +25,13 @@ Cell CellOf(const glm::dvec3& x, double size) {
 }
 
 // A patch as the rule sees it: its plane, centre, corners and extent, and
-// how wide a group holding it may be.
+// what is known so far of the distance to its nearest receiver (Fits).
 struct PatchInfo {
   glm::dvec3 c{0.0}, n{0.0};
   double offset = 0;
   std::vector<int> corners;     // vertex ids of its elements' corners
   glm::dvec3 lo{0.0}, hi{0.0};  // their bounding box
-  double limit = 0;             // the widest group it may be in
+  double near = 0, far = 0;     // the distance is at least near, at most far
   bool candidate = false;
 };
 
@@ -61,27 +62,27 @@ class Grouper {
       group.assign(1, int(p));
       taken[p] = 1;
       glm::dvec3 lo = info_[p].lo, hi = info_[p].hi;
-      double limit = info_[p].limit;
       int looked = 0;
       for (int q : cell) {
         if (q <= int(p) || taken[q]) continue;
         if (int(group.size()) == kMaxGroup || ++looked > kLookAhead) break;
-        // No wider than the nearest receiver of any member allows.
         const glm::dvec3 l = glm::min(lo, info_[q].lo), h = glm::max(hi, info_[q].hi);
-        const double lim = std::min(limit, info_[q].limit);
-        if (glm::length(h - l) > lim) continue;
-        bool ok = true;
-        for (int g : group)
-          if (!Compatible(g, q)) {
-            ok = false;
-            break;
-          }
-        if (!ok) continue;
+        const double width = glm::length(h - l);
+        // The rule's tests (the answer is their conjunction), cheapest
+        // first: no wider than the nearest receiver of any member allows
+        // (mostly known, or settled by a receiver found nearby), then the
+        // planes, then the segments.
+        auto all = [&](auto test) {
+          return std::all_of(group.begin(), group.end(), test);
+        };
+        if (!Fits(q, width) || !all([&](int g) { return Fits(g, width); }) ||
+            !all([&](int g) { return Alike(g, q); }) ||
+            !all([&](int g) { return Clear(g, q); }))
+          continue;
         group.push_back(q);
         taken[q] = 1;
         lo = l;
         hi = h;
-        limit = lim;
       }
       if (group.size() < 2) continue;
       PatchGroup pg;
@@ -123,8 +124,8 @@ class Grouper {
     }
   }
 
-  // Every element's bounding box, and a tree of them; then each patch's
-  // limit from the nearest element it can light.
+  // Every element's bounding box, and a tree of them; then which patches
+  // are candidates.
   void IndexElements() {
     stamp_.assign(m_.elems.size(), 0);
     BuildTree();
@@ -138,11 +139,26 @@ class Grouper {
       // cast the shadows of one point over several patches' width.
       const double size = glm::length(in.hi - in.lo);
       if (size > kSmallPatch * m_.patch_size) continue;
-      // Only a candidate's limit is used: the search may stop once p is
-      // sure not to be one.
-      in.limit = std::min(G_, kGroupReach * Nearest(int(p), size));
-      in.candidate = size <= in.limit;
+      in.far = G_ / kGroupReach;
+      in.candidate = Fits(int(p), size);
     }
+  }
+
+  // May patch p be in a group `width` across: width <= min(G, kGroupReach
+  // · d(p)), d(p) its distance to the nearest element it can light (G /
+  // kGroupReach when none is nearer). The first question, whether p is a
+  // candidate, looks only as far as p's size (most small patches of a
+  // dense scene are not); a later one, from a partner that faces alike,
+  // finds d(p) (a group grows, and asks again); what was found is kept.
+  bool Fits(int p, double width) {
+    PatchInfo& in = info_[size_t(p)];
+    if (width > G_ || kGroupReach * in.far < width) return false;
+    if (width <= kGroupReach * in.near) return true;
+    const double within = in.near > 0 ? G_ / kGroupReach : width / kGroupReach;
+    const double d = Nearest(p, within, width);
+    if (d < within) in.far = d;                      // an element it lights, that far
+    if (kGroupReach * d >= width) in.near = d;       // none nearer (the search ran out)
+    return kGroupReach * d >= width;
   }
 
   // A bounding-volume tree of the elements' boxes: the elements in the
@@ -222,18 +238,39 @@ class Grouper {
   }
 
   // The distance from p's centre to the nearest element (bounding box) that
-  // p can light: in front of p's plane, facing p, of another patch; G_ /
-  // kGroupReach when none is nearer. Down the tree, past every box no
-  // nearer than the best so far or wholly on or behind p's plane (its
-  // corner farthest in front is not in front): the exact least distance,
-  // whatever the order of the search; or, as soon as one is found nearer
-  // than `size` / kGroupReach (p is too wide to be a candidate then: the
-  // least is nearer still), that one.
-  double Nearest(int p, double size) {
+  // p can light: in front of p's plane, facing p, of another patch; `within`
+  // when none is nearer. Down the tree, past every box no nearer than the
+  // best so far or wholly on or behind p's plane (its corner farthest in
+  // front is not in front): the exact least distance, whatever the order of
+  // the search; or, as soon as one is found nearer than `width` /
+  // kGroupReach (p cannot be in a group that wide then: the least is
+  // nearer still), that one.
+  double Nearest(int p, double within, double width) {
     const PatchInfo& in = info_[size_t(p)];
-    double best = G_ / kGroupReach;
+    double best = within;
     const size_t n = order_.size();
     if (n == 0) return best;
+    // The elements that were nearest for the last few searches first
+    // (patches come in mesh order, neighbours after one another): one of
+    // them often ends the search at once, or bounds it.
+    int found = -1;
+    for (int k : recent_)
+      if (k >= 0) {
+        const double dist = BoxDistance(elo_[size_t(k)], ehi_[size_t(k)], in.c);
+        if (dist < best && LightsSlot(p, size_t(k))) {
+          best = dist;
+          found = k;
+        }
+      }
+    auto remember = [&] {
+      if (found < 0 || std::find(recent_.begin(), recent_.end(), found) != recent_.end()) return;
+      std::rotate(recent_.rbegin(), recent_.rbegin() + 1, recent_.rend());
+      recent_[0] = found;
+    };
+    if (kGroupReach * best < width) {
+      remember();
+      return best;
+    }
     // Best first: the box nearest p's centre next, so that the search
     // ends at the first box no nearer than the best element so far.
     heap_.clear();
@@ -252,14 +289,18 @@ class Grouper {
       if (v.level == 0) {
         for (size_t k = size_t(v.i) * kLeaf, end = std::min(n, k + kLeaf); k < end; ++k) {
           const double dist = BoxDistance(elo_[k], ehi_[k], in.c);
-          if (dist < best && LightsSlot(p, k)) best = dist;
+          if (dist < best && LightsSlot(p, k)) {
+            best = dist;
+            found = int(k);
+          }
         }
-        if (kGroupReach * best < size) return best;
+        if (kGroupReach * best < width) break;
         continue;
       }
       const size_t below = levels_[size_t(v.level) - 1].size();
       for (int c = 2 * v.i; c <= 2 * v.i + 1 && size_t(c) < below; ++c) push(v.level - 1, c);
     }
+    remember();
     return best;
   }
 
@@ -307,8 +348,9 @@ class Grouper {
     return false;
   }
 
-  // May a and b shoot as one? The rule of groups.h.
-  bool Compatible(int a, int b) {
+  // May a and b shoot as one, as far as their planes tell? The rule of
+  // groups.h but the segment between them (Clear).
+  bool Alike(int a, int b) const {
     const PatchInfo& A = info_[a];
     const PatchInfo& B = info_[b];
     if (glm::dot(A.n, B.n) < std::cos(kGroupAngle * M_PI / 180)) return false;
@@ -316,7 +358,7 @@ class Grouper {
       if (glm::dot(A.n, m_.verts[v]) - A.offset < -tau_) return false;
     for (int v : A.corners)
       if (glm::dot(B.n, m_.verts[v]) - B.offset < -tau_) return false;
-    return Clear(a, b);
+    return true;
   }
 
   // Every element by the cells of C_ its bounding box overlaps (in the
@@ -405,8 +447,13 @@ class Grouper {
     double d;  // the box's distance from the patch's centre
     int level, i;
   };
-  static bool Farther(const Visit& a, const Visit& b) { return a.d > b.d; }
+  // Deeper first among equally near (many boxes hold p's centre): down to
+  // a leaf rather than across the tree.
+  static bool Farther(const Visit& a, const Visit& b) {
+    return a.d > b.d || (a.d == b.d && a.level > b.level);
+  }
   std::vector<Visit> heap_;                  // Nearest's boxes to look into
+  std::array<int, 4> recent_{-1, -1, -1, -1};  // Nearest's last answers, in order_, newest first
   std::vector<uint32_t> stamp_;      // per element: last search that looked at it
   uint32_t stamp_now_ = 0;
 };
