@@ -35,6 +35,14 @@ struct PatchInfo {
   bool candidate = false;
 };
 
+// A box of the tree of elements (Grouper::BuildTree): their bounding box,
+// and of their planes the normals' bounding box and the least offset.
+struct Box {
+  glm::dvec3 lo{0.0}, hi{0.0};
+  glm::dvec3 nlo{0.0}, nhi{0.0};
+  double off = 0;
+};
+
 class Grouper {
  public:
   Grouper(const MeshOptions& opts, Mesh* mesh) : m_(*mesh) {
@@ -204,20 +212,41 @@ class Grouper {
     std::vector<std::pair<uint64_t, int>>().swap(keyed);
     levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
     for (size_t i = 0; i < n; ++i) {
-      Box& b = levels_[0][i / kLeaf];
-      b.lo = i % kLeaf ? glm::min(b.lo, elo_[i]) : elo_[i];
-      b.hi = i % kLeaf ? glm::max(b.hi, ehi_[i]) : ehi_[i];
+      const PatchInfo& in = info_[size_t(patch_of_[i])];
+      Extend(&levels_[0][i / kLeaf], {elo_[i], ehi_[i], in.n, in.n, in.offset}, i % kLeaf == 0);
     }
     while (levels_.back().size() > 1) {
       const std::vector<Box>& below = levels_.back();
       std::vector<Box> up((below.size() + 1) / 2);
-      for (size_t i = 0; i < below.size(); ++i) {
-        Box& b = up[i / 2];
-        b.lo = i % 2 ? glm::min(b.lo, below[i].lo) : below[i].lo;
-        b.hi = i % 2 ? glm::max(b.hi, below[i].hi) : below[i].hi;
-      }
+      for (size_t i = 0; i < below.size(); ++i) Extend(&up[i / 2], below[i], i % 2 == 0);
       levels_.push_back(std::move(up));
     }
+  }
+
+  // b made to hold o too (to be o, when b holds nothing yet).
+  static void Extend(Box* b, const Box& o, bool first) {
+    if (first) {
+      *b = o;
+      return;
+    }
+    b->lo = glm::min(b->lo, o.lo);
+    b->hi = glm::max(b->hi, o.hi);
+    b->nlo = glm::min(b->nlo, o.nlo);
+    b->nhi = glm::max(b->nhi, o.nhi);
+    b->off = std::min(b->off, o.off);
+  }
+
+  // May an element in b face patch p: some point of p's box in front of
+  // its plane (Lights, LightsSlot)? Each term of the dot product bounded by
+  // the largest over the corners of the normals' box and p's box, summed
+  // in glm::dot's order, less the least offset: rounding is monotonic, so
+  // no element b holds is farther in front than this.
+  bool MayFace(const Box& b, const PatchInfo& in) const {
+    glm::dvec3 m;
+    for (int i = 0; i < 3; ++i)
+      m[i] = std::max(std::max(b.nlo[i] * in.lo[i], b.nlo[i] * in.hi[i]),
+                      std::max(b.nhi[i] * in.lo[i], b.nhi[i] * in.hi[i]));
+    return m.x + m.y + m.z - b.off > eps_;
   }
 
   // The bits of x (21) spread to every third bit: one axis of a Morton code.
@@ -240,11 +269,11 @@ class Grouper {
   // The distance from p's centre to the nearest element (bounding box) that
   // p can light: in front of p's plane, facing p, of another patch; `within`
   // when none is nearer. Down the tree, past every box no nearer than the
-  // best so far or wholly on or behind p's plane (its corner farthest in
-  // front is not in front): the exact least distance, whatever the order of
-  // the search; or, as soon as one is found nearer than `width` /
-  // kGroupReach (p cannot be in a group that wide then: the least is
-  // nearer still), that one.
+  // best so far, wholly on or behind p's plane (its corner farthest in
+  // front is not in front) or facing away from p (MayFace): the exact least
+  // distance, whatever the order of the search; or, as soon as one is found
+  // nearer than `width` / kGroupReach (p cannot be in a group that wide
+  // then: the least is nearer still), that one.
   double Nearest(int p, double within, double width) {
     const PatchInfo& in = info_[size_t(p)];
     double best = within;
@@ -277,7 +306,7 @@ class Grouper {
     auto push = [&](int level, int i) {
       const Box& b = levels_[size_t(level)][size_t(i)];
       const double d = BoxDistance(b.lo, b.hi, in.c);
-      if (d >= best || Side(b.lo, b.hi, in.n, in.offset) < 0) return;
+      if (d >= best || Side(b.lo, b.hi, in.n, in.offset) < 0 || !MayFace(b, in)) return;
       heap_.push_back({d, level, i});
       std::push_heap(heap_.begin(), heap_.end(), Farther);
     };
@@ -436,9 +465,6 @@ class Grouper {
   std::vector<PatchInfo> info_;
   Grid grid_;                        // elements by the cells of C_ they overlap (Clear)
   std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes, in order_
-  struct Box {
-    glm::dvec3 lo{0.0}, hi{0.0};
-  };
   static constexpr size_t kLeaf = 8;         // elements to a leaf of the tree
   std::vector<int> order_;                   // elements in the tree's order
   std::vector<int> patch_of_;                // ... and their patches
