@@ -42,6 +42,11 @@ struct Box {
   glm::dvec3 nlo{0.0}, nhi{0.0};
   double off = 0;
 };
+// A box of the tree to look into (Grouper::Nearest): levels_[level][i].
+struct Visit {
+  double d;  // the box's distance from the patch's centre
+  int level, i;
+};
 
 class Grouper {
  public:
@@ -277,8 +282,7 @@ class Grouper {
   double Nearest(int p, double within, double width) {
     const PatchInfo& in = info_[size_t(p)];
     double best = within;
-    const size_t n = order_.size();
-    if (n == 0) return best;
+    if (order_.empty()) return best;
     // The elements that were nearest for the last few searches first
     // (patches come in mesh order, neighbours after one another): one of
     // them often ends the search at once, or bounds it.
@@ -300,14 +304,36 @@ class Grouper {
       remember();
       return best;
     }
+    // Any element nearer than `within` ends the search: depth first, the
+    // nearer child first, the first one found.
+    if (kGroupReach * within <= width) {
+      stack_.clear();
+      Visit root{0, int(levels_.size()) - 1, 0};
+      if (Worth(p, best, &root)) stack_.push_back(root);
+      while (!stack_.empty() && found < 0) {
+        const Visit v = stack_.back();
+        stack_.pop_back();
+        if (v.level == 0) {
+          ScanLeaf(p, v.i, &best, &found);
+          continue;
+        }
+        const size_t below = levels_[size_t(v.level) - 1].size();
+        Visit a{0, v.level - 1, 2 * v.i}, b{0, v.level - 1, 2 * v.i + 1};
+        const bool has_a = Worth(p, best, &a), has_b = size_t(b.i) < below && Worth(p, best, &b);
+        if (has_a && has_b && a.d < b.d) std::swap(a, b);
+        if (has_a) stack_.push_back(a);
+        if (has_b) stack_.push_back(b);
+      }
+      remember();
+      return best;
+    }
     // Best first: the box nearest p's centre next, so that the search
     // ends at the first box no nearer than the best element so far.
     heap_.clear();
     auto push = [&](int level, int i) {
-      const Box& b = levels_[size_t(level)][size_t(i)];
-      const double d = BoxDistance(b.lo, b.hi, in.c);
-      if (d >= best || Side(b.lo, b.hi, in.n, in.offset) < 0 || !MayFace(b, in)) return;
-      heap_.push_back({d, level, i});
+      Visit v{0, level, i};
+      if (!Worth(p, best, &v)) return;
+      heap_.push_back(v);
       std::push_heap(heap_.begin(), heap_.end(), Farther);
     };
     push(int(levels_.size()) - 1, 0);
@@ -316,13 +342,7 @@ class Grouper {
       const Visit v = heap_.back();
       heap_.pop_back();
       if (v.level == 0) {
-        for (size_t k = size_t(v.i) * kLeaf, end = std::min(n, k + kLeaf); k < end; ++k) {
-          const double dist = BoxDistance(elo_[k], ehi_[k], in.c);
-          if (dist < best && LightsSlot(p, k)) {
-            best = dist;
-            found = int(k);
-          }
-        }
+        ScanLeaf(p, v.i, &best, &found);
         if (kGroupReach * best < width) break;
         continue;
       }
@@ -331,6 +351,29 @@ class Grouper {
     }
     remember();
     return best;
+  }
+
+  // Is box v of the tree worth looking into for p's receivers nearer than
+  // best: not as far, not wholly on or behind p's plane, not facing away.
+  // Sets v's distance.
+  bool Worth(int p, double best, Visit* v) const {
+    const PatchInfo& in = info_[size_t(p)];
+    const Box& b = levels_[size_t(v->level)][size_t(v->i)];
+    v->d = BoxDistance(b.lo, b.hi, in.c);
+    return v->d < best && Side(b.lo, b.hi, in.n, in.offset) >= 0 && MayFace(b, in);
+  }
+
+  // The elements of leaf i that p lights nearer than *best: *best the
+  // nearest one's distance, *found its place.
+  void ScanLeaf(int p, int i, double* best, int* found) const {
+    const PatchInfo& in = info_[size_t(p)];
+    for (size_t k = size_t(i) * kLeaf, end = std::min(order_.size(), k + kLeaf); k < end; ++k) {
+      const double dist = BoxDistance(elo_[k], ehi_[k], in.c);
+      if (dist < *best && LightsSlot(p, k)) {
+        *best = dist;
+        *found = int(k);
+      }
+    }
   }
 
   // Where box lo, hi lies against plane dot(n, x) == offset: +1 wholly in
@@ -469,16 +512,12 @@ class Grouper {
   std::vector<int> order_;                   // elements in the tree's order
   std::vector<int> patch_of_;                // ... and their patches
   std::vector<std::vector<Box>> levels_;     // the tree's boxes: leaves first, root last
-  struct Visit {
-    double d;  // the box's distance from the patch's centre
-    int level, i;
-  };
   // Deeper first among equally near (many boxes hold p's centre): down to
   // a leaf rather than across the tree.
   static bool Farther(const Visit& a, const Visit& b) {
     return a.d > b.d || (a.d == b.d && a.level > b.level);
   }
-  std::vector<Visit> heap_;                  // Nearest's boxes to look into
+  std::vector<Visit> heap_, stack_;          // Nearest's boxes to look into
   std::array<int, 4> recent_{-1, -1, -1, -1};  // Nearest's last answers, in order_, newest first
   std::vector<uint32_t> stamp_;      // per element: last search that looked at it
   uint32_t stamp_now_ = 0;
