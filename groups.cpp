@@ -508,7 +508,7 @@ class Grouper {
   std::vector<PatchInfo> info_;
   Grid grid_;                        // elements by the cells of C_ they overlap (Clear)
   std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes, in order_
-  static constexpr size_t kLeaf = 8;         // elements to a leaf of the tree
+  static constexpr size_t kLeaf = 32;        // elements to a leaf of the tree
   std::vector<int> order_;                   // elements in the tree's order
   std::vector<int> patch_of_;                // ... and their patches
   std::vector<std::vector<Box>> levels_;     // the tree's boxes: leaves first, root last
