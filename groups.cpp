@@ -63,32 +63,43 @@ class Grouper {
   void Run(Mesh* mesh) {
     Describe();
     IndexElements();
-    Grid cells;  // candidates by cell of G_, by id
+    // Candidates by cell of G_, by id, with their boxes: a first member's
+    // look ahead reads them in a row.
+    struct Entry {
+      int id;
+      glm::dvec3 lo, hi;
+    };
+    std::unordered_map<Cell, std::vector<Entry>, CellHash> cells;
     for (size_t p = 0; p < info_.size(); ++p)
-      if (info_[p].candidate) cells[CellOf(info_[p].c, G_)].push_back(int(p));
+      if (info_[p].candidate)
+        cells[CellOf(info_[p].c, G_)].push_back({int(p), info_[p].lo, info_[p].hi});
     if (cells.empty()) return;
     std::vector<char> taken(info_.size(), 0);
     std::vector<int> group;
     for (size_t p = 0; p < info_.size(); ++p) {
       if (!info_[p].candidate || taken[p]) continue;
-      const std::vector<int>& cell = cells[CellOf(info_[p].c, G_)];
+      const std::vector<Entry>& cell = cells[CellOf(info_[p].c, G_)];
       group.assign(1, int(p));
       taken[p] = 1;
       glm::dvec3 lo = info_[p].lo, hi = info_[p].hi;
       int looked = 0;
-      for (int q : cell) {
-        if (q <= int(p) || taken[q]) continue;
+      for (auto it = std::upper_bound(cell.begin(), cell.end(), int(p),
+                                      [](int id, const Entry& e) { return id < e.id; });
+           it != cell.end(); ++it) {
+        const int q = it->id;
+        if (taken[q]) continue;
         if (int(group.size()) == kMaxGroup || ++looked > kLookAhead) break;
-        const glm::dvec3 l = glm::min(lo, info_[q].lo), h = glm::max(hi, info_[q].hi);
+        const glm::dvec3 l = glm::min(lo, it->lo), h = glm::max(hi, it->hi);
         const double width = glm::length(h - l);
         // The rule's tests (the answer is their conjunction), cheapest
         // first: no wider than the nearest receiver of any member allows
-        // (mostly known, or settled by a receiver found nearby), then the
-        // planes, then the segments.
+        // (mostly known, or settled by a receiver found nearby; the members'
+        // first, as they are asked again and again), then the planes, then
+        // the segments.
         auto all = [&](auto test) {
           return std::all_of(group.begin(), group.end(), test);
         };
-        if (!Fits(q, width) || !all([&](int g) { return Fits(g, width); }) ||
+        if (!all([&](int g) { return Fits(g, width); }) || !Fits(q, width) ||
             !all([&](int g) { return Alike(g, q); }) ||
             !all([&](int g) { return Clear(g, q); }))
           continue;
