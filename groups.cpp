@@ -220,8 +220,10 @@ class Grouper {
     elo_.resize(n);
     ehi_.resize(n);
     patch_of_.resize(n);
+    slot_of_.resize(n);
     for (size_t i = 0; i < n; ++i) {
       order_[i] = keyed[i].second;
+      slot_of_[size_t(order_[i])] = int(i);
       bound(size_t(order_[i]), &elo_[i], &ehi_[i]);
       patch_of_[i] = m_.elems[size_t(order_[i])].patch;
     }
@@ -311,6 +313,11 @@ class Grouper {
       std::rotate(recent_.rbegin(), recent_.rbegin() + 1, recent_.rend());
       recent_[0] = found;
     };
+    // Then the leaf of p's first element: its neighbours in the tree's
+    // order are near it.
+    const IdSpan tops = m_.Tops(p);
+    if (tops.size() > 0 && !(kGroupReach * best < width))
+      ScanLeaf(p, slot_of_[size_t(tops[0])] / int(kLeaf), &best, &found);
     if (kGroupReach * best < width) {
       remember();
       return best;
@@ -522,6 +529,7 @@ class Grouper {
   static constexpr size_t kLeaf = 32;        // elements to a leaf of the tree
   std::vector<int> order_;                   // elements in the tree's order
   std::vector<int> patch_of_;                // ... and their patches
+  std::vector<int> slot_of_;                 // each element's place in order_
   std::vector<std::vector<Box>> levels_;     // the tree's boxes: leaves first, root last
   // Deeper first among equally near (many boxes hold p's centre): down to
   // a leaf rather than across the tree.
