@@ -316,14 +316,15 @@ class Grouper {
     // Then the leaf of p's first element: its neighbours in the tree's
     // order are near it.
     const IdSpan tops = m_.Tops(p);
-    if (tops.size() > 0 && !(kGroupReach * best < width))
-      ScanLeaf(p, slot_of_[size_t(tops[0])] / int(kLeaf), &best, &found);
+    const int home = tops.size() > 0 ? slot_of_[size_t(tops[0])] / int(kLeaf) : -1;
+    if (home >= 0 && !(kGroupReach * best < width)) ScanLeaf(p, home, &best, &found);
     if (kGroupReach * best < width) {
       remember();
       return best;
     }
     // Any element nearer than `within` ends the search: depth first, the
-    // nearer child first, the first one found.
+    // nearer child first (of two as near, the one that holds the leaf of
+    // p's first element), the first one found.
     if (kGroupReach * within <= width) {
       stack_.clear();
       Visit root{0, int(levels_.size()) - 1, 0};
@@ -338,7 +339,8 @@ class Grouper {
         const size_t below = levels_[size_t(v.level) - 1].size();
         Visit a{0, v.level - 1, 2 * v.i}, b{0, v.level - 1, 2 * v.i + 1};
         const bool has_a = Worth(p, best, &a), has_b = size_t(b.i) < below && Worth(p, best, &b);
-        if (has_a && has_b && a.d < b.d) std::swap(a, b);
+        if (has_a && has_b && (a.d < b.d || (a.d == b.d && home >> a.level == a.i)))
+          std::swap(a, b);
         if (has_a) stack_.push_back(a);
         if (has_b) stack_.push_back(b);
       }
