@@ -1,6 +1,7 @@
 #include "groups.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
 
@@ -24,14 +25,27 @@ Cell CellOf(const glm::dvec3& x, double size) {
 }
 
 // A patch as the rule sees it: its plane, centre, corners and extent, and
-// how wide a group holding it may be.
+// what is known so far of the distance to its nearest receiver (Fits).
 struct PatchInfo {
   glm::dvec3 c{0.0}, n{0.0};
   double offset = 0;
   std::vector<int> corners;     // vertex ids of its elements' corners
   glm::dvec3 lo{0.0}, hi{0.0};  // their bounding box
-  double limit = 0;             // the widest group it may be in
+  double near = 0, far = 0;     // the distance is at least near, at most far
   bool candidate = false;
+};
+
+// A box of the tree of elements (Grouper::BuildTree): their bounding box,
+// and of their planes the normals' bounding box and the least offset.
+struct Box {
+  glm::dvec3 lo{0.0}, hi{0.0};
+  glm::dvec3 nlo{0.0}, nhi{0.0};
+  double off = 0;
+};
+// A box of the tree to look into (Grouper::Nearest): levels_[level][i].
+struct Visit {
+  double d;  // the box's distance from the patch's centre
+  int level, i;
 };
 
 class Grouper {
@@ -49,39 +63,50 @@ class Grouper {
   void Run(Mesh* mesh) {
     Describe();
     IndexElements();
-    Grid cells;  // candidates by cell of G_, by id
+    // Candidates by cell of G_, by id, with their boxes: a first member's
+    // look ahead reads them in a row.
+    struct Entry {
+      int id;
+      glm::dvec3 lo, hi;
+    };
+    std::unordered_map<Cell, std::vector<Entry>, CellHash> cells;
     for (size_t p = 0; p < info_.size(); ++p)
-      if (info_[p].candidate) cells[CellOf(info_[p].c, G_)].push_back(int(p));
+      if (info_[p].candidate)
+        cells[CellOf(info_[p].c, G_)].push_back({int(p), info_[p].lo, info_[p].hi});
     if (cells.empty()) return;
     std::vector<char> taken(info_.size(), 0);
     std::vector<int> group;
     for (size_t p = 0; p < info_.size(); ++p) {
       if (!info_[p].candidate || taken[p]) continue;
-      const std::vector<int>& cell = cells[CellOf(info_[p].c, G_)];
+      const std::vector<Entry>& cell = cells[CellOf(info_[p].c, G_)];
       group.assign(1, int(p));
       taken[p] = 1;
       glm::dvec3 lo = info_[p].lo, hi = info_[p].hi;
-      double limit = info_[p].limit;
       int looked = 0;
-      for (int q : cell) {
-        if (q <= int(p) || taken[q]) continue;
+      for (auto it = std::upper_bound(cell.begin(), cell.end(), int(p),
+                                      [](int id, const Entry& e) { return id < e.id; });
+           it != cell.end(); ++it) {
+        const int q = it->id;
+        if (taken[q]) continue;
         if (int(group.size()) == kMaxGroup || ++looked > kLookAhead) break;
-        // No wider than the nearest receiver of any member allows.
-        const glm::dvec3 l = glm::min(lo, info_[q].lo), h = glm::max(hi, info_[q].hi);
-        const double lim = std::min(limit, info_[q].limit);
-        if (glm::length(h - l) > lim) continue;
-        bool ok = true;
-        for (int g : group)
-          if (!Compatible(g, q)) {
-            ok = false;
-            break;
-          }
-        if (!ok) continue;
+        const glm::dvec3 l = glm::min(lo, it->lo), h = glm::max(hi, it->hi);
+        const double width = glm::length(h - l);
+        // The rule's tests (the answer is their conjunction), cheapest
+        // first: no wider than the nearest receiver of any member allows
+        // (mostly known, or settled by a receiver found nearby; the members'
+        // first, as they are asked again and again), then the planes, then
+        // the segments.
+        auto all = [&](auto test) {
+          return std::all_of(group.begin(), group.end(), test);
+        };
+        if (!all([&](int g) { return Fits(g, width); }) || !Fits(q, width) ||
+            !all([&](int g) { return Alike(g, q); }) ||
+            !all([&](int g) { return Clear(g, q); }))
+          continue;
         group.push_back(q);
         taken[q] = 1;
         lo = l;
         hi = h;
-        limit = lim;
       }
       if (group.size() < 2) continue;
       PatchGroup pg;
@@ -123,8 +148,8 @@ class Grouper {
     }
   }
 
-  // Every element's bounding box, and a tree of them; then each patch's
-  // limit from the nearest element it can light.
+  // Every element's bounding box, and a tree of them; then which patches
+  // are candidates.
   void IndexElements() {
     stamp_.assign(m_.elems.size(), 0);
     BuildTree();
@@ -138,11 +163,26 @@ class Grouper {
       // cast the shadows of one point over several patches' width.
       const double size = glm::length(in.hi - in.lo);
       if (size > kSmallPatch * m_.patch_size) continue;
-      // Only a candidate's limit is used: the search may stop once p is
-      // sure not to be one.
-      in.limit = std::min(G_, kGroupReach * Nearest(int(p), size));
-      in.candidate = size <= in.limit;
+      in.far = G_ / kGroupReach;
+      in.candidate = Fits(int(p), size);
     }
+  }
+
+  // May patch p be in a group `width` across: width <= min(G, kGroupReach
+  // · d(p)), d(p) its distance to the nearest element it can light (G /
+  // kGroupReach when none is nearer). The first question, whether p is a
+  // candidate, looks only as far as p's size (most small patches of a
+  // dense scene are not); a later one, from a partner that faces alike,
+  // finds d(p) (a group grows, and asks again); what was found is kept.
+  bool Fits(int p, double width) {
+    PatchInfo& in = info_[size_t(p)];
+    if (width > G_ || kGroupReach * in.far < width) return false;
+    if (width <= kGroupReach * in.near) return true;
+    const double within = in.near > 0 ? G_ / kGroupReach : width / kGroupReach;
+    const double d = Nearest(p, within, width);
+    if (d < within) in.far = d;                      // an element it lights, that far
+    if (kGroupReach * d >= width) in.near = d;       // none nearer (the search ran out)
+    return kGroupReach * d >= width;
   }
 
   // A bounding-volume tree of the elements' boxes: the elements in the
@@ -180,28 +220,51 @@ class Grouper {
     elo_.resize(n);
     ehi_.resize(n);
     patch_of_.resize(n);
+    slot_of_.resize(n);
     for (size_t i = 0; i < n; ++i) {
       order_[i] = keyed[i].second;
+      slot_of_[size_t(order_[i])] = int(i);
       bound(size_t(order_[i]), &elo_[i], &ehi_[i]);
       patch_of_[i] = m_.elems[size_t(order_[i])].patch;
     }
     std::vector<std::pair<uint64_t, int>>().swap(keyed);
     levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
     for (size_t i = 0; i < n; ++i) {
-      Box& b = levels_[0][i / kLeaf];
-      b.lo = i % kLeaf ? glm::min(b.lo, elo_[i]) : elo_[i];
-      b.hi = i % kLeaf ? glm::max(b.hi, ehi_[i]) : ehi_[i];
+      const PatchInfo& in = info_[size_t(patch_of_[i])];
+      Extend(&levels_[0][i / kLeaf], {elo_[i], ehi_[i], in.n, in.n, in.offset}, i % kLeaf == 0);
     }
     while (levels_.back().size() > 1) {
       const std::vector<Box>& below = levels_.back();
       std::vector<Box> up((below.size() + 1) / 2);
-      for (size_t i = 0; i < below.size(); ++i) {
-        Box& b = up[i / 2];
-        b.lo = i % 2 ? glm::min(b.lo, below[i].lo) : below[i].lo;
-        b.hi = i % 2 ? glm::max(b.hi, below[i].hi) : below[i].hi;
-      }
+      for (size_t i = 0; i < below.size(); ++i) Extend(&up[i / 2], below[i], i % 2 == 0);
       levels_.push_back(std::move(up));
     }
+  }
+
+  // b made to hold o too (to be o, when b holds nothing yet).
+  static void Extend(Box* b, const Box& o, bool first) {
+    if (first) {
+      *b = o;
+      return;
+    }
+    b->lo = glm::min(b->lo, o.lo);
+    b->hi = glm::max(b->hi, o.hi);
+    b->nlo = glm::min(b->nlo, o.nlo);
+    b->nhi = glm::max(b->nhi, o.nhi);
+    b->off = std::min(b->off, o.off);
+  }
+
+  // May an element in b face patch p: some point of p's box in front of
+  // its plane (Lights, LightsSlot)? Each term of the dot product bounded by
+  // the largest over the corners of the normals' box and p's box, summed
+  // in glm::dot's order, less the least offset: rounding is monotonic, so
+  // no element b holds is farther in front than this.
+  bool MayFace(const Box& b, const PatchInfo& in) const {
+    glm::dvec3 m;
+    for (int i = 0; i < 3; ++i)
+      m[i] = std::max(std::max(b.nlo[i] * in.lo[i], b.nlo[i] * in.hi[i]),
+                      std::max(b.nhi[i] * in.lo[i], b.nhi[i] * in.hi[i]));
+    return m.x + m.y + m.z - b.off > eps_;
   }
 
   // The bits of x (21) spread to every third bit: one axis of a Morton code.
@@ -222,26 +285,75 @@ class Grouper {
   }
 
   // The distance from p's centre to the nearest element (bounding box) that
-  // p can light: in front of p's plane, facing p, of another patch; G_ /
-  // kGroupReach when none is nearer. Down the tree, past every box no
-  // nearer than the best so far or wholly on or behind p's plane (its
-  // corner farthest in front is not in front): the exact least distance,
-  // whatever the order of the search; or, as soon as one is found nearer
-  // than `size` / kGroupReach (p is too wide to be a candidate then: the
-  // least is nearer still), that one.
-  double Nearest(int p, double size) {
+  // p can light: in front of p's plane, facing p, of another patch; `within`
+  // when none is nearer. Down the tree, past every box no nearer than the
+  // best so far, wholly on or behind p's plane (its corner farthest in
+  // front is not in front) or facing away from p (MayFace): the exact least
+  // distance, whatever the order of the search; or, as soon as one is found
+  // nearer than `width` / kGroupReach (p cannot be in a group that wide
+  // then: the least is nearer still), that one.
+  double Nearest(int p, double within, double width) {
     const PatchInfo& in = info_[size_t(p)];
-    double best = G_ / kGroupReach;
-    const size_t n = order_.size();
-    if (n == 0) return best;
+    double best = within;
+    if (order_.empty()) return best;
+    // The elements that were nearest for the last few searches first
+    // (patches come in mesh order, neighbours after one another): one of
+    // them often ends the search at once, or bounds it.
+    int found = -1;
+    for (int k : recent_)
+      if (k >= 0) {
+        const double dist = BoxDistance(elo_[size_t(k)], ehi_[size_t(k)], in.c);
+        if (dist < best && LightsSlot(p, size_t(k))) {
+          best = dist;
+          found = k;
+        }
+      }
+    auto remember = [&] {
+      if (found < 0 || std::find(recent_.begin(), recent_.end(), found) != recent_.end()) return;
+      std::rotate(recent_.rbegin(), recent_.rbegin() + 1, recent_.rend());
+      recent_[0] = found;
+    };
+    // Then the leaf of p's first element: its neighbours in the tree's
+    // order are near it.
+    const IdSpan tops = m_.Tops(p);
+    const int home = tops.size() > 0 ? slot_of_[size_t(tops[0])] / int(kLeaf) : -1;
+    if (home >= 0 && !(kGroupReach * best < width)) ScanLeaf(p, home, &best, &found);
+    if (kGroupReach * best < width) {
+      remember();
+      return best;
+    }
+    // Any element nearer than `within` ends the search: depth first, the
+    // nearer child first (of two as near, the one that holds the leaf of
+    // p's first element), the first one found.
+    if (kGroupReach * within <= width) {
+      stack_.clear();
+      Visit root{0, int(levels_.size()) - 1, 0};
+      if (Worth(p, best, &root)) stack_.push_back(root);
+      while (!stack_.empty() && found < 0) {
+        const Visit v = stack_.back();
+        stack_.pop_back();
+        if (v.level == 0) {
+          ScanLeaf(p, v.i, &best, &found);
+          continue;
+        }
+        const size_t below = levels_[size_t(v.level) - 1].size();
+        Visit a{0, v.level - 1, 2 * v.i}, b{0, v.level - 1, 2 * v.i + 1};
+        const bool has_a = Worth(p, best, &a), has_b = size_t(b.i) < below && Worth(p, best, &b);
+        if (has_a && has_b && (a.d < b.d || (a.d == b.d && home >> a.level == a.i)))
+          std::swap(a, b);
+        if (has_a) stack_.push_back(a);
+        if (has_b) stack_.push_back(b);
+      }
+      remember();
+      return best;
+    }
     // Best first: the box nearest p's centre next, so that the search
     // ends at the first box no nearer than the best element so far.
     heap_.clear();
     auto push = [&](int level, int i) {
-      const Box& b = levels_[size_t(level)][size_t(i)];
-      const double d = BoxDistance(b.lo, b.hi, in.c);
-      if (d >= best || Side(b.lo, b.hi, in.n, in.offset) < 0) return;
-      heap_.push_back({d, level, i});
+      Visit v{0, level, i};
+      if (!Worth(p, best, &v)) return;
+      heap_.push_back(v);
       std::push_heap(heap_.begin(), heap_.end(), Farther);
     };
     push(int(levels_.size()) - 1, 0);
@@ -250,17 +362,38 @@ class Grouper {
       const Visit v = heap_.back();
       heap_.pop_back();
       if (v.level == 0) {
-        for (size_t k = size_t(v.i) * kLeaf, end = std::min(n, k + kLeaf); k < end; ++k) {
-          const double dist = BoxDistance(elo_[k], ehi_[k], in.c);
-          if (dist < best && LightsSlot(p, k)) best = dist;
-        }
-        if (kGroupReach * best < size) return best;
+        ScanLeaf(p, v.i, &best, &found);
+        if (kGroupReach * best < width) break;
         continue;
       }
       const size_t below = levels_[size_t(v.level) - 1].size();
       for (int c = 2 * v.i; c <= 2 * v.i + 1 && size_t(c) < below; ++c) push(v.level - 1, c);
     }
+    remember();
     return best;
+  }
+
+  // Is box v of the tree worth looking into for p's receivers nearer than
+  // best: not as far, not wholly on or behind p's plane, not facing away.
+  // Sets v's distance.
+  bool Worth(int p, double best, Visit* v) const {
+    const PatchInfo& in = info_[size_t(p)];
+    const Box& b = levels_[size_t(v->level)][size_t(v->i)];
+    v->d = BoxDistance(b.lo, b.hi, in.c);
+    return v->d < best && Side(b.lo, b.hi, in.n, in.offset) >= 0 && MayFace(b, in);
+  }
+
+  // The elements of leaf i that p lights nearer than *best: *best the
+  // nearest one's distance, *found its place.
+  void ScanLeaf(int p, int i, double* best, int* found) const {
+    const PatchInfo& in = info_[size_t(p)];
+    for (size_t k = size_t(i) * kLeaf, end = std::min(order_.size(), k + kLeaf); k < end; ++k) {
+      const double dist = BoxDistance(elo_[k], ehi_[k], in.c);
+      if (dist < *best && LightsSlot(p, k)) {
+        *best = dist;
+        *found = int(k);
+      }
+    }
   }
 
   // Where box lo, hi lies against plane dot(n, x) == offset: +1 wholly in
@@ -307,8 +440,9 @@ class Grouper {
     return false;
   }
 
-  // May a and b shoot as one? The rule of groups.h.
-  bool Compatible(int a, int b) {
+  // May a and b shoot as one, as far as their planes tell? The rule of
+  // groups.h but the segment between them (Clear).
+  bool Alike(int a, int b) const {
     const PatchInfo& A = info_[a];
     const PatchInfo& B = info_[b];
     if (glm::dot(A.n, B.n) < std::cos(kGroupAngle * M_PI / 180)) return false;
@@ -316,7 +450,7 @@ class Grouper {
       if (glm::dot(A.n, m_.verts[v]) - A.offset < -tau_) return false;
     for (int v : A.corners)
       if (glm::dot(B.n, m_.verts[v]) - B.offset < -tau_) return false;
-    return Clear(a, b);
+    return true;
   }
 
   // Every element by the cells of C_ its bounding box overlaps (in the
@@ -394,19 +528,18 @@ class Grouper {
   std::vector<PatchInfo> info_;
   Grid grid_;                        // elements by the cells of C_ they overlap (Clear)
   std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes, in order_
-  struct Box {
-    glm::dvec3 lo{0.0}, hi{0.0};
-  };
-  static constexpr size_t kLeaf = 8;         // elements to a leaf of the tree
+  static constexpr size_t kLeaf = 32;        // elements to a leaf of the tree
   std::vector<int> order_;                   // elements in the tree's order
   std::vector<int> patch_of_;                // ... and their patches
+  std::vector<int> slot_of_;                 // each element's place in order_
   std::vector<std::vector<Box>> levels_;     // the tree's boxes: leaves first, root last
-  struct Visit {
-    double d;  // the box's distance from the patch's centre
-    int level, i;
-  };
-  static bool Farther(const Visit& a, const Visit& b) { return a.d > b.d; }
-  std::vector<Visit> heap_;                  // Nearest's boxes to look into
+  // Deeper first among equally near (many boxes hold p's centre): down to
+  // a leaf rather than across the tree.
+  static bool Farther(const Visit& a, const Visit& b) {
+    return a.d > b.d || (a.d == b.d && a.level > b.level);
+  }
+  std::vector<Visit> heap_, stack_;          // Nearest's boxes to look into
+  std::array<int, 4> recent_{-1, -1, -1, -1};  // Nearest's last answers, in order_, newest first
   std::vector<uint32_t> stamp_;      // per element: last search that looked at it
   uint32_t stamp_now_ = 0;
 };

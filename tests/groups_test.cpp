@@ -94,6 +94,28 @@ TEST(Groups, TilesOfOneFloorShootTogether) {
   EXPECT_EQ(Shooters(alone), alone.patches.size());
 }
 
+// Only what faces a patch is its receiver: a panel 0.2 above the middle of
+// the tiled floor, facing up, leaves its groups as they are (the search
+// passes boxes whose elements all face away); facing down, it is the
+// nearest receiver of the tiles under and around it (0.2 to 0.21 away),
+// and no pair of tiles (0.22 across) groups.
+TEST(Groups, OnlyReceiversFacingAPatchLimitItsGroups) {
+  auto with_panel = [](bool up) {
+    Scene s = TiledBox(10);
+    const glm::dvec3 a(0.3, 0.2, 0.3), b(0.3, 0.2, 0.7), c(0.7, 0.2, 0.7), d(0.7, 0.2, 0.3);
+    AddFace(&s, up ? std::vector<glm::dvec3>{a, b, c, d} : std::vector<glm::dvec3>{d, c, b, a},
+            glm::dvec3(0.5), glm::dvec3(0));
+    for (size_t f = 0; f < s.faces.size(); ++f) s.faces[f].index = int(f);
+    return MakeMesh(s, Half());
+  };
+  const Mesh up = with_panel(true);
+  size_t members = 0;
+  for (const PatchGroup& g : up.groups) members += g.members.size();
+  EXPECT_EQ(up.groups.size(), 16u);
+  EXPECT_EQ(members, 36u);
+  EXPECT_TRUE(with_panel(false).groups.empty());
+}
+
 // A group's shot: the members give up exactly their unshot power, what the
 // receivers gain is ρ·ΣxA·F, and no member receives from its own group;
 // on coplanar tiles and on tiles up to 0.003 above one another.
