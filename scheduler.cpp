@@ -42,6 +42,7 @@ bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wa
     solver->Split(p);
     edits->push_back(~p);
   }
+  if (!splits.empty()) solver->SplitsDone();
   subdivider->CountTime(ThreadCpuSeconds() - t0);
   // Splits alone (subdivision over) do not start a wave.
   return due && subdivider->WaveOver();

@@ -267,6 +267,7 @@ void Solver::Rebase() {
 }
 
 int Solver::Select() {
+  CHECK(!splits_pending_);
   const glm::dvec3 amb = overshoot_ ? Ambient() : glm::dvec3(0.0);
   const glm::dvec3 d = glm::abs(amb - base_);
   double drift = (d.r + d.g + d.b) * (1 + 1e-9);
@@ -285,6 +286,7 @@ int Solver::Select() {
 }
 
 void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
+  CHECK(!splits_pending_);
   // A group (groups.h) shoots Σ x·A of its members from one column, and
   // each member gives up exactly its own x: what leaves is what is shot.
   const PatchGroup* group = GroupOf(mesh_, p);
@@ -570,8 +572,13 @@ void Solver::Split(int p) {
     left -= part;
     patch_[size_t(q)].unshot = part / patch_[size_t(q)].area;
   }
+  splits_pending_ = true;
+}
+
+void Solver::SplitsDone() {
   Resum();
   Rebase();
+  splits_pending_ = false;
 }
 
 std::vector<glm::dvec3> Solver::TakeRadiosity() {

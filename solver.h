@@ -112,8 +112,15 @@ class Solver {
   // by area where nothing was received), so no power is made or lost
   // (to rounding); the pieces inherit p's flags and start their own shot
   // counts. Emitters are never split (Subdivider::SplitPass), so what a
-  // piece holds is received light.
+  // piece holds is received light. The splits of one pass end with one
+  // SplitsDone() before the next Select or Shoot.
   void Split(int p);
+  // The running sums summed again and the shooter queue rebuilt, once for
+  // all the splits since the last call: each costs O(patches), and a pass
+  // at 10^5 patches and more splits thousands of them. The same state as
+  // doing both after every split (a full sum and a build depend only on
+  // the patches as they are).
+  void SplitsDone();
   // A new wave (paper §4.4): all computed radiosity is thrown away and the
   // solution starts again from the emitters, on the mesh as it is now.
   void NewWave();
@@ -212,6 +219,7 @@ class Solver {
   glm::dvec3 reflect_{1.0};         // 1/(1−ρ̄): ambient interreflection factor
   double total_area_ = 0, emitted_ = 0;
   long shots_ = 0;
+  bool splits_pending_ = false;     // Split() called, SplitsDone() not yet
 };
 
 #endif

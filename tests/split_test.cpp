@@ -122,6 +122,7 @@ TEST(Split, SolverKeepsTheUnshotPower) {
   ASSERT_GT(whole, 0);
   SplitPatch(&m, p);
   solver.Split(p);
+  solver.SplitsDone();
   ASSERT_EQ(solver.unshot().size(), m.patches.size());
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(Sum(solver.unshot(), m, c), before[c], 1e-13 * before[c]);
   // By received radiosity: the brightest piece holds the most.
@@ -144,6 +145,39 @@ TEST(Split, SolverKeepsTheUnshotPower) {
     ASSERT_GE(s, 0);
     ShotColumn(&h, m, s, solver.TimesShot(s), true, 1, &col);
     solver.Shoot(s, col);
+  }
+}
+
+// A pass's splits brought up to date once (SplitsDone) leave the solver
+// as one call after each split does: the same state and the same shots.
+TEST(Split, OneSplitsDoneAPassIsOneASplit) {
+  Mesh once = MakeMesh(Floor(), Coarse());
+  Mesh each = once;
+  Solver a(once, true), b(each, true);
+  Hemicube h(64);
+  std::vector<FormFactor> col;
+  auto shoot = [&](Solver* s, const Mesh& m) {
+    const int p = s->Select();
+    ASSERT_GE(p, 0);
+    ShotColumn(&h, m, p, s->TimesShot(p), true, 1, &col);
+    s->Shoot(p, col);
+  };
+  for (int i = 0; i < 3; ++i) shoot(&a, once), shoot(&b, each);
+  for (int p : {0, 1, 2}) {
+    if (once.Emission(once.faces[once.patches[p].face]) != glm::dvec3(0)) continue;
+    SplitPatch(&once, p), a.Split(p);
+    SplitPatch(&each, p), b.Split(p), b.SplitsDone();
+  }
+  a.SplitsDone();
+  ASSERT_GT(once.patches.size(), 5u);
+  for (int i = 0; i < 30; ++i) {
+    const SolverState sa = a.State(), sb = b.State();
+    ASSERT_EQ(sa.b, sb.b);
+    ASSERT_EQ(sa.unshot, sb.unshot);
+    ASSERT_EQ(sa.unshot_sum, sb.unshot_sum);
+    ASSERT_EQ(sa.abs_sum, sb.abs_sum);
+    ASSERT_EQ(a.Select(), b.Select());
+    shoot(&a, once), shoot(&b, each);
   }
 }
 
