@@ -371,10 +371,10 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
   // Only a face holding one of the shooter's group members has leaves to
   // leave out: elsewhere no leaf's element is read from the mesh.
   const bool own = self_ >= 0 && std::binary_search(self_faces_.begin(), self_faces_.end(), cf.face);
-  for (int r = cf.lb, at = cf.pb; r < cf.le; ++r, ++at) {
+  for (int r = cf.lb, at = cf.pb; r < cf.le; at += outline_n_[r], ++r) {
     if (own && mesh.group_of[mesh.elems[elem_[r]].patch] == self_) continue;
-    const int32_t* vid = &outline_[outline_at_[at]];
-    const int n = outline_at_[at + 1] - outline_at_[at];
+    const int32_t* vid = &outline_[at];
+    const int n = outline_n_[r];
     uint32_t all = ~0u, any = 0;
     for (int i = 0; i < n; ++i) {
       all &= code_[vid[i]];
@@ -551,7 +551,12 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
         ends &= ends - 1;
         if (it[x0] >= 0) {
           const int32_t id = elem_[it[x0]];
-          acc_[id] += pre[x1] - pre[x0];
+          int32_t& b = block_[id >> 6];
+          if (b < 0) {
+            b = int32_t(acc_.size() / 64);
+            acc_.resize(acc_.size() + 64, 0.0);
+          }
+          acc_[size_t(b) * 64 + (id & 63)] += pre[x1] - pre[x0];
           touched_[id >> 6] |= uint64_t(1) << (id & 63);
         }
         x0 = x1;
@@ -567,13 +572,16 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
   out->clear();
   for (size_t w = 0; w < touched_.size(); ++w) {
     uint64_t bits = touched_[w];
+    if (!bits) continue;
     touched_[w] = 0;
+    const double* sum = &acc_[size_t(block_[w]) * 64];
+    block_[w] = -1;
     for (; bits; bits &= bits - 1) {
-      const size_t id = 64 * w + __builtin_ctzll(bits);
-      if (acc_[id] > 0) out->push_back({int32_t(id), float(acc_[id])});
-      acc_[id] = 0;
+      const int k = __builtin_ctzll(bits);
+      if (sum[k] > 0) out->push_back({int32_t(64 * w + k), float(sum[k])});
     }
   }
+  acc_.clear();
   const double t3 = MonotonicSeconds();
   if (stats) {
     stats->transform_s += clock[1];

@@ -83,7 +83,7 @@ class Hemicube {
     int vb = 0, ve = 0;           // its vertices: Mesh::verts[vb, ve)
     int nd = 0;                   // and its divide_verts' count
     int lb = 0, le = 0;           // its leaves' ranks: [lb, le)
-    int pb = 0;                   // its first leaf's outline_at_ slot
+    int pb = 0;                   // its first leaf's outline in outline_
   };
   struct Node {                   // of the hierarchy over faces, depth first
     glm::dvec3 lo{0.0}, hi{0.0};
@@ -141,7 +141,7 @@ class Hemicube {
   std::vector<int32_t> by_face_;   // faces_ indices in mesh face order
   std::vector<int32_t> elem_;      // rank -> element id; ranks in face order
   std::vector<int32_t> outline_;   // face-relative vertex indices
-  std::vector<int32_t> outline_at_;// leaf k's outline: [at[k], at[k + 1])
+  std::vector<uint8_t> outline_n_; // per rank: its outline's length
   std::vector<Node> nodes_;
 
   // Per column: the shooter's frame and per-face scratch.
@@ -154,8 +154,11 @@ class Hemicube {
   std::vector<uint32_t> code_;       // outcodes per vertex, 5 bits per face
   std::vector<float> sx_[5], sy_[5]; // pixel x, y on each hemicube face
   std::vector<int> stack_;
-  std::vector<double> acc_;          // per element
-  std::vector<uint64_t> touched_;    // per element: acc_ non-zero
+  // Form factors summed per element, sparse: a block of 64 sums for each
+  // 64 elements a column reaches, not 8 bytes for every element.
+  std::vector<double> acc_;
+  std::vector<int32_t> block_;       // per 64 elements: its block in acc_, or -1
+  std::vector<uint64_t> touched_;    // per element: its sum is in acc_
   long visited_ = 0;                 // leaves drawn this column
 };
 
