@@ -551,12 +551,12 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
         ends &= ends - 1;
         if (it[x0] >= 0) {
           const int32_t id = elem_[it[x0]];
-          int32_t& b = block_[id >> 6];
+          int32_t& b = block_[id / kSumBlock];
           if (b < 0) {
-            b = int32_t(acc_.size() / 64);
-            acc_.resize(acc_.size() + 64, 0.0);
+            b = int32_t(acc_.size());
+            acc_.resize(acc_.size() + kSumBlock, 0.0);
           }
-          acc_[size_t(b) * 64 + (id & 63)] += pre[x1] - pre[x0];
+          acc_[size_t(b) + id % kSumBlock] += pre[x1] - pre[x0];
           touched_[id >> 6] |= uint64_t(1) << (id & 63);
         }
         x0 = x1;
@@ -574,12 +574,12 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
     uint64_t bits = touched_[w];
     if (!bits) continue;
     touched_[w] = 0;
-    const double* sum = &acc_[size_t(block_[w]) * 64];
-    block_[w] = -1;
-    for (; bits; bits &= bits - 1) {
-      const int k = __builtin_ctzll(bits);
-      if (sum[k] > 0) out->push_back({int32_t(64 * w + k), float(sum[k])});
+    for (uint64_t left = bits; left; left &= left - 1) {
+      const int32_t id = int32_t(64 * w + __builtin_ctzll(left));
+      const double sum = acc_[size_t(block_[id / kSumBlock]) + id % kSumBlock];
+      if (sum > 0) out->push_back({id, float(sum)});
     }
+    for (; bits; bits &= bits - 1) block_[(64 * w + __builtin_ctzll(bits)) / kSumBlock] = -1;
   }
   acc_.clear();
   const double t3 = MonotonicSeconds();

@@ -154,10 +154,12 @@ class Hemicube {
   std::vector<uint32_t> code_;       // outcodes per vertex, 5 bits per face
   std::vector<float> sx_[5], sy_[5]; // pixel x, y on each hemicube face
   std::vector<int> stack_;
-  // Form factors summed per element, sparse: a block of 64 sums for each
-  // 64 elements a column reaches, not 8 bytes for every element.
+  // Form factors summed per element, sparse: a block of kSumBlock sums for
+  // each kSumBlock elements a column reaches, not 8 bytes for every
+  // element (a light in a room of boxes reaches 64-element blocks all).
+  static constexpr int kSumBlock = 8;
   std::vector<double> acc_;
-  std::vector<int32_t> block_;       // per 64 elements: its block in acc_, or -1
+  std::vector<int32_t> block_;       // per kSumBlock elements: its first sum in acc_, or -1
   std::vector<uint64_t> touched_;    // per element: its sum is in acc_
   long visited_ = 0;                 // leaves drawn this column
 };

@@ -152,8 +152,8 @@ void Hemicube::BuildCache(const Mesh& mesh) {
     sy_[h].resize(most);
   }
   acc_.clear();
-  block_.assign((mesh.elems.size() + 63) / 64, -1);
-  touched_.assign(block_.size(), 0);
+  block_.assign((mesh.elems.size() + kSumBlock - 1) / kSumBlock, -1);
+  touched_.assign((mesh.elems.size() + 63) / 64, 0);
 }
 
 // Median split along the box's longest axis, down to a few faces a node:
