@@ -140,7 +140,11 @@ class Hemicube {
   std::vector<CacheFace> faces_;
   std::vector<int32_t> by_face_;   // faces_ indices in mesh face order
   std::vector<int32_t> elem_;      // rank -> element id; ranks in face order
-  std::vector<int32_t> outline_;   // face-relative vertex indices
+  // Face-relative vertex indices: 16 bits, or 32 in outline_wide_ (and
+  // wide_) when a face has more than 65,536 vertices.
+  std::vector<uint16_t> outline_;
+  std::vector<int32_t> outline_wide_;
+  bool wide_ = false;
   std::vector<uint8_t> outline_n_; // per rank: its outline's length
   std::vector<Node> nodes_;
 

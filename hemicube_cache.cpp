@@ -45,7 +45,8 @@ void Hemicube::BuildCache(const Mesh& mesh) {
   // The old cache's largest arrays go first, not kept beside the new ones
   // (a rebuild after divisions).
   std::vector<CacheFace>().swap(faces_);
-  std::vector<int32_t>().swap(outline_);
+  std::vector<uint16_t>().swap(outline_);
+  std::vector<int32_t>().swap(outline_wide_);
   // First in face order: planes, boxes and ranks (the order a plain
   // z-buffer draws the leaves in, which breaks depth ties).
   std::vector<CacheFace> byface;
@@ -111,9 +112,16 @@ void Hemicube::BuildCache(const Mesh& mesh) {
     outline_n_[r] = uint8_t(Outline(mesh.elems[elem_[r]], vid));
     total += outline_n_[r];
   }
-  outline_.clear();
-  outline_.reserve(total);
   size_t most = 0;
+  for (const CacheFace& cf : faces_) {
+    const MeshFace& mf = mesh.faces[cf.face];
+    most = std::max(most, size_t(mf.vend - mf.vbegin) + mf.divide_verts.size());
+  }
+  // 16 bits an index where they fit: 8 bytes an element less.
+  wide_ = most > 65536;
+  if (wide_) outline_wide_.reserve(total);
+  else outline_.reserve(total);
+  size_t at = 0;
   for (size_t f = 0; f < faces_.size(); ++f) {
     CacheFace& cf = faces_[f];
     by_face_[order[f]] = int(f);
@@ -128,8 +136,7 @@ void Hemicube::BuildCache(const Mesh& mesh) {
     const std::vector<int>& dv = mf.divide_verts;
     CHECK(dv.empty() || dv.front() >= mf.vend);
     CHECK(std::adjacent_find(dv.begin(), dv.end(), std::greater_equal<int>()) == dv.end());
-    most = std::max(most, size_t(cf.ve - cf.vb) + dv.size());
-    cf.pb = int(outline_.size());
+    cf.pb = int(at);
     for (int r = cf.lb; r < cf.le; ++r) {
       int vid[8];
       const int nv = Outline(mesh.elems[elem_[r]], vid);
@@ -141,7 +148,9 @@ void Hemicube::BuildCache(const Mesh& mesh) {
           rel = cf.ve - cf.vb + int(it - dv.begin());
         }
         CHECK(rel >= 0);
-        outline_.push_back(rel);
+        if (wide_) outline_wide_.push_back(rel);
+        else outline_.push_back(uint16_t(rel));
+        ++at;
       }
     }
   }
