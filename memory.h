@@ -16,8 +16,9 @@
 // for a few bytes an element more and for scenes that mesh less evenly).
 constexpr double kMasterBytesPerElement = 470;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
-// (measured 288).
-constexpr double kWorkerBytesPerElement = 330;
+// (measured 219: the end of BuildMesh, the mesh beside the surfaces, just
+// above the columns' mesh and hemicube cache).
+constexpr double kWorkerBytesPerElement = 250;
 
 // Bytes this process may still use: physical memory, or less where
 // ulimit -v / -d or a cgroup's memory.max says so.
