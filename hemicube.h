@@ -73,8 +73,8 @@ class Hemicube {
  private:
   // The mesh as the column reads it, rebuilt when the mesh changes (built,
   // divided, replaced; Key): flat, in the order it is read, each face's
-  // leaves contiguous with their outlines precomputed. About 30 bytes an
-  // element and 160 a face, the per-element sums included.
+  // leaves contiguous with their outlines precomputed. About 14 bytes an
+  // element (a quad's) and 140 a face; the sums only where a column reaches.
   struct CacheFace {
     glm::dvec3 normal{0.0};
     double offset = 0;
