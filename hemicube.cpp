@@ -555,7 +555,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
         const int x1 = base + __builtin_ctzll(ends) + 1;
         ends &= ends - 1;
         if (it[x0] >= 0) {
-          const int32_t id = elem_[it[x0]];
+          const uint32_t id = uint32_t(elem_[it[x0]]);  // unsigned: / and % are shifts
           int32_t& b = block_[id / kSumBlock];
           if (b < 0) {
             b = int32_t(acc_.size());
