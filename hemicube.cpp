@@ -371,61 +371,66 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
   // Only a face holding one of the shooter's group members has leaves to
   // leave out: elsewhere no leaf's element is read from the mesh.
   const bool own = self_ >= 0 && std::binary_search(self_faces_.begin(), self_faces_.end(), cf.face);
-  for (int r = cf.lb, at = cf.pb; r < cf.le; ++r, ++at) {
-    if (own && mesh.group_of[mesh.elems[elem_[r]].patch] == self_) continue;
-    const int32_t* vid = &outline_[outline_at_[at]];
-    const int n = outline_at_[at + 1] - outline_at_[at];
-    uint32_t all = ~0u, any = 0;
-    for (int i = 0; i < n; ++i) {
-      all &= code_[vid[i]];
-      any |= code_[vid[i]];
-    }
-    for (int h = 0; h < 5; ++h) {
-      if (!((mask >> h) & 1) || ((all >> (5 * h)) & 31)) continue;  // not here, or wholly outside one plane
-      float pt[9][2];  // an 8-gon clipped by one plane
-      if (!((any >> (5 * h)) & kNear)) {
+  // Its leaves, by their outlines (16-bit indices but on a huge face: BuildCache).
+  auto leaves = [&](const auto* outline) {
+    for (int r = cf.lb, at = cf.pb; r < cf.le; at += outline_n_[r], ++r) {
+      if (own && mesh.group_of[mesh.elems[elem_[r]].patch] == self_) continue;
+      const auto* vid = outline + at;
+      const int n = outline_n_[r];
+      uint32_t all = ~0u, any = 0;
+      for (int i = 0; i < n; ++i) {
+        all &= code_[vid[i]];
+        any |= code_[vid[i]];
+      }
+      for (int h = 0; h < 5; ++h) {
+        if (!((mask >> h) & 1) || ((all >> (5 * h)) & 31)) continue;  // not here, or wholly outside one plane
+        float pt[9][2];  // an 8-gon clipped by one plane
+        if (!((any >> (5 * h)) & kNear)) {
+          for (int i = 0; i < n; ++i) {
+            pt[i][0] = sx_[h][vid[i]];
+            pt[i][1] = sy_[h][vid[i]];
+          }
+          if (!culling_ || !Hidden(h, pt, n, za[h], zb[h], zc[h])) Scan(h, pt, n, za[h], zb[h], zc[h], r);
+          continue;
+        }
+        // Crosses the near plane: clip in this face's frame, then project.
+        float in[8][3], poly[9][3];
         for (int i = 0; i < n; ++i) {
-          pt[i][0] = sx_[h][vid[i]];
-          pt[i][1] = sy_[h][vid[i]];
+          const float p[3] = {lx[vid[i]], ly[vid[i]], lz[vid[i]]};
+          ToFace(h, p, in[i]);
         }
-        if (!culling_ || !Hidden(h, pt, n, za[h], zb[h], zc[h])) Scan(h, pt, n, za[h], zb[h], zc[h], r);
-        continue;
-      }
-      // Crosses the near plane: clip in this face's frame, then project.
-      float in[8][3], poly[9][3];
-      for (int i = 0; i < n; ++i) {
-        const float p[3] = {lx[vid[i]], ly[vid[i]], lz[vid[i]]};
-        ToFace(h, p, in[i]);
-      }
-      int m = 0;
-      for (int i = 0; i < n; ++i) {
-        const int j = (i + 1) % n;
-        const float* a = in[i];
-        const float* bq = in[j];
-        if (a[2] >= near_) std::copy(a, a + 3, poly[m++]);
-        if ((a[2] >= near_) != (bq[2] >= near_)) {
-          // Intersect from the lower vertex id: neighbours agree exactly.
-          const float* lo = vid[i] < vid[j] ? a : bq;
-          const float* hi = vid[i] < vid[j] ? bq : a;
-          const float s = (near_ - lo[2]) / (hi[2] - lo[2]);
-          poly[m][0] = lo[0] + s * (hi[0] - lo[0]);
-          poly[m][1] = lo[1] + s * (hi[1] - lo[1]);
-          poly[m][2] = near_;
-          ++m;
+        int m = 0;
+        for (int i = 0; i < n; ++i) {
+          const int j = (i + 1) % n;
+          const float* a = in[i];
+          const float* bq = in[j];
+          if (a[2] >= near_) std::copy(a, a + 3, poly[m++]);
+          if ((a[2] >= near_) != (bq[2] >= near_)) {
+            // Intersect from the lower vertex id: neighbours agree exactly.
+            const float* lo = vid[i] < vid[j] ? a : bq;
+            const float* hi = vid[i] < vid[j] ? bq : a;
+            const float s = (near_ - lo[2]) / (hi[2] - lo[2]);
+            poly[m][0] = lo[0] + s * (hi[0] - lo[0]);
+            poly[m][1] = lo[1] + s * (hi[1] - lo[1]);
+            poly[m][2] = near_;
+            ++m;
+          }
         }
+        if (m < 3) continue;
+        // The same arithmetic as sx_, sy_, so unclipped corners match it bit
+        // for bit and neighbours stay watertight.
+        const float yoff = h == 0 ? half : 0.0f;
+        for (int i = 0; i < m; ++i) {
+          const float inv = half / poly[i][2];
+          pt[i][0] = poly[i][0] * inv + half;
+          pt[i][1] = poly[i][1] * inv + yoff;
+        }
+        Scan(h, pt, m, za[h], zb[h], zc[h], r);
       }
-      if (m < 3) continue;
-      // The same arithmetic as sx_, sy_, so unclipped corners match it bit
-      // for bit and neighbours stay watertight.
-      const float yoff = h == 0 ? half : 0.0f;
-      for (int i = 0; i < m; ++i) {
-        const float inv = half / poly[i][2];
-        pt[i][0] = poly[i][0] * inv + half;
-        pt[i][1] = poly[i][1] * inv + yoff;
-      }
-      Scan(h, pt, m, za[h], zb[h], zc[h], r);
     }
-  }
+  };
+  if (wide_) leaves(outline_wide_.data());
+  else leaves(outline_.data());
   visited_ += cf.le - cf.lb;
   if (clock) {
     const double now = MonotonicSeconds();
@@ -550,8 +555,13 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
         const int x1 = base + __builtin_ctzll(ends) + 1;
         ends &= ends - 1;
         if (it[x0] >= 0) {
-          const int32_t id = elem_[it[x0]];
-          acc_[id] += pre[x1] - pre[x0];
+          const uint32_t id = uint32_t(elem_[it[x0]]);  // unsigned: / and % are shifts
+          int32_t& b = block_[id / kSumBlock];
+          if (b < 0) {
+            b = int32_t(acc_.size());
+            acc_.resize(acc_.size() + kSumBlock, 0.0);
+          }
+          acc_[size_t(b) + id % kSumBlock] += pre[x1] - pre[x0];
           touched_[id >> 6] |= uint64_t(1) << (id & 63);
         }
         x0 = x1;
@@ -567,13 +577,16 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
   out->clear();
   for (size_t w = 0; w < touched_.size(); ++w) {
     uint64_t bits = touched_[w];
+    if (!bits) continue;
     touched_[w] = 0;
-    for (; bits; bits &= bits - 1) {
-      const size_t id = 64 * w + __builtin_ctzll(bits);
-      if (acc_[id] > 0) out->push_back({int32_t(id), float(acc_[id])});
-      acc_[id] = 0;
+    for (uint64_t left = bits; left; left &= left - 1) {
+      const int32_t id = int32_t(64 * w + __builtin_ctzll(left));
+      const double sum = acc_[size_t(block_[id / kSumBlock]) + id % kSumBlock];
+      if (sum > 0) out->push_back({id, float(sum)});
     }
+    for (; bits; bits &= bits - 1) block_[(64 * w + __builtin_ctzll(bits)) / kSumBlock] = -1;
   }
+  acc_.clear();
   const double t3 = MonotonicSeconds();
   if (stats) {
     stats->transform_s += clock[1];

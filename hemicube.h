@@ -73,8 +73,8 @@ class Hemicube {
  private:
   // The mesh as the column reads it, rebuilt when the mesh changes (built,
   // divided, replaced; Key): flat, in the order it is read, each face's
-  // leaves contiguous with their outlines precomputed. About 30 bytes an
-  // element and 160 a face, the per-element sums included.
+  // leaves contiguous with their outlines precomputed. About 14 bytes an
+  // element (a quad's) and 140 a face; the sums only where a column reaches.
   struct CacheFace {
     glm::dvec3 normal{0.0};
     double offset = 0;
@@ -83,7 +83,7 @@ class Hemicube {
     int vb = 0, ve = 0;           // its vertices: Mesh::verts[vb, ve)
     int nd = 0;                   // and its divide_verts' count
     int lb = 0, le = 0;           // its leaves' ranks: [lb, le)
-    int pb = 0;                   // its first leaf's outline_at_ slot
+    int pb = 0;                   // its first leaf's outline in outline_
   };
   struct Node {                   // of the hierarchy over faces, depth first
     glm::dvec3 lo{0.0}, hi{0.0};
@@ -140,8 +140,12 @@ class Hemicube {
   std::vector<CacheFace> faces_;
   std::vector<int32_t> by_face_;   // faces_ indices in mesh face order
   std::vector<int32_t> elem_;      // rank -> element id; ranks in face order
-  std::vector<int32_t> outline_;   // face-relative vertex indices
-  std::vector<int32_t> outline_at_;// leaf k's outline: [at[k], at[k + 1])
+  // Face-relative vertex indices: 16 bits, or 32 in outline_wide_ (and
+  // wide_) when a face has more than 65,536 vertices.
+  std::vector<uint16_t> outline_;
+  std::vector<int32_t> outline_wide_;
+  bool wide_ = false;
+  std::vector<uint8_t> outline_n_; // per rank: its outline's length
   std::vector<Node> nodes_;
 
   // Per column: the shooter's frame and per-face scratch.
@@ -154,8 +158,13 @@ class Hemicube {
   std::vector<uint32_t> code_;       // outcodes per vertex, 5 bits per face
   std::vector<float> sx_[5], sy_[5]; // pixel x, y on each hemicube face
   std::vector<int> stack_;
-  std::vector<double> acc_;          // per element
-  std::vector<uint64_t> touched_;    // per element: acc_ non-zero
+  // Form factors summed per element, sparse: a block of kSumBlock sums for
+  // each kSumBlock elements a column reaches, not 8 bytes for every
+  // element (a light in a room of boxes reaches 64-element blocks all).
+  static constexpr int kSumBlock = 8;
+  std::vector<double> acc_;
+  std::vector<int32_t> block_;       // per kSumBlock elements: its first sum in acc_, or -1
+  std::vector<uint64_t> touched_;    // per element: its sum is in acc_
   long visited_ = 0;                 // leaves drawn this column
 };
 

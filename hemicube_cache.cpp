@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 
 #include "check.h"
 #include "groups.h"
@@ -41,12 +42,17 @@ Hemicube::Key Hemicube::KeyOf(const Mesh& mesh) {
 
 void Hemicube::BuildCache(const Mesh& mesh) {
   key_ = KeyOf(mesh);
+  // The old cache's largest arrays go first, not kept beside the new ones
+  // (a rebuild after divisions).
+  std::vector<CacheFace>().swap(faces_);
+  std::vector<uint16_t>().swap(outline_);
+  std::vector<int32_t>().swap(outline_wide_);
   // First in face order: planes, boxes and ranks (the order a plain
   // z-buffer draws the leaves in, which breaks depth ties).
   std::vector<CacheFace> byface;
   std::vector<int> leaves;
   // Reserved to their sizes (an upper bound for byface): grown by doubling,
-  // the two copies of faces were the largest thing a -j 0 master held.
+  // the copies of faces were the largest thing a -j 0 master held.
   byface.reserve(mesh.faces.size());
   elem_.clear();
   elem_.reserve(size_t(mesh.LeafCount()));
@@ -78,45 +84,75 @@ void Hemicube::BuildCache(const Mesh& mesh) {
   if (!order.empty()) BuildNodes(byface, &order, 0, int(order.size()));
 
   // Then laid out in the hierarchy's order, the order a column reads them:
-  // each face's vertices and its leaves' outlines together.
-  faces_.clear();
-  faces_.reserve(order.size());
+  // each face's vertices and its leaves' outlines together. The faces are
+  // permuted in place, cycle by cycle: a second copy of them was the
+  // largest thing a worker held while it built the cache.
+  faces_ = std::move(byface);
   by_face_.assign(order.size(), 0);
-  outline_.clear();
-  outline_at_.assign(1, 0);
-  std::vector<int> rel(mesh.verts.size(), -1);  // this face's vertices only
+  {
+    std::vector<bool> done(order.size());
+    for (size_t i = 0; i < order.size(); ++i) {
+      if (done[i]) continue;
+      const CacheFace first = faces_[i];
+      size_t j = i;
+      for (size_t k = size_t(order[j]); k != i; j = k, k = size_t(order[k])) {
+        faces_[j] = faces_[k];
+        done[j] = true;
+      }
+      faces_[j] = first;
+      done[j] = true;
+    }
+  }
+  // Each leaf's outline, counted first so that it is allocated once at
+  // its size (grown by doubling, its old copies stayed resident).
+  outline_n_.resize(elem_.size());
+  size_t total = 0;
+  for (size_t r = 0; r < elem_.size(); ++r) {
+    int vid[8];
+    outline_n_[r] = uint8_t(Outline(mesh, elem_[r], vid));
+    total += outline_n_[r];
+  }
   size_t most = 0;
-  for (int k : order) {
-    by_face_[k] = int(faces_.size());
-    CacheFace cf = byface[k];
+  for (const CacheFace& cf : faces_) {
+    const MeshFace& mf = mesh.faces[cf.face];
+    most = std::max(most, size_t(mf.vend - mf.vbegin) + mf.divide_verts.size());
+  }
+  // 16 bits an index where they fit: 8 bytes an element less.
+  wide_ = most > 65536;
+  if (wide_) outline_wide_.reserve(total);
+  else outline_.reserve(total);
+  size_t at = 0;
+  for (size_t f = 0; f < faces_.size(); ++f) {
+    CacheFace& cf = faces_[f];
+    by_face_[order[f]] = int(f);
     const MeshFace& mf = mesh.faces[cf.face];
     cf.vb = mf.vbegin;
     cf.ve = mf.vend;
     cf.nd = int(mf.divide_verts.size());
-    // Face-relative indices, in the order DrawFace transforms them, keep
-    // the order of vertex ids (Divide appends), which the near-plane clip
-    // relies on to cut shared edges alike.
-    int n = 0;
-    for (int i = mf.vbegin; i < mf.vend; ++i) rel[i] = n++;
-    int last = mf.vend - 1;
-    for (int i : mf.divide_verts) {
-      CHECK(i > last && rel[i] < 0);
-      rel[last = i] = n++;
-    }
-    most = std::max(most, size_t(n));
-    cf.pb = int(outline_at_.size()) - 1;
+    // Face-relative indices, in the order DrawFace transforms them: its
+    // vertices, then its divide_verts, which keep the order of vertex ids
+    // (Divide appends), as the near-plane clip needs to cut shared edges
+    // alike; so a divide_vert's index is found by binary search.
+    const std::vector<int>& dv = mf.divide_verts;
+    CHECK(dv.empty() || dv.front() >= mf.vend);
+    CHECK(std::adjacent_find(dv.begin(), dv.end(), std::greater_equal<int>()) == dv.end());
+    cf.pb = int(at);
     for (int r = cf.lb; r < cf.le; ++r) {
       int vid[8];
       const int nv = Outline(mesh, elem_[r], vid);
       for (int i = 0; i < nv; ++i) {
-        CHECK(rel[vid[i]] >= 0);  // a vertex of this face
-        outline_.push_back(rel[vid[i]]);
+        int rel = vid[i] - cf.vb;
+        if (vid[i] >= cf.ve) {
+          const auto it = std::lower_bound(dv.begin(), dv.end(), vid[i]);
+          CHECK(it != dv.end() && *it == vid[i]);  // a vertex of this face
+          rel = cf.ve - cf.vb + int(it - dv.begin());
+        }
+        CHECK(rel >= 0);
+        if (wide_) outline_wide_.push_back(rel);
+        else outline_.push_back(uint16_t(rel));
+        ++at;
       }
-      outline_at_.push_back(int(outline_.size()));
     }
-    for (int i = mf.vbegin; i < mf.vend; ++i) rel[i] = -1;
-    for (int i : mf.divide_verts) rel[i] = -1;
-    faces_.push_back(cf);
   }
   for (auto* a : {&lx_, &ly_, &lz_}) a->resize(most);
   code_.resize(most);
@@ -124,7 +160,8 @@ void Hemicube::BuildCache(const Mesh& mesh) {
     sx_[h].resize(most);
     sy_[h].resize(most);
   }
-  acc_.assign(mesh.elems.size(), 0.0);
+  acc_.clear();
+  block_.assign((mesh.elems.size() + kSumBlock - 1) / kSumBlock, -1);
   touched_.assign((mesh.elems.size() + 63) / 64, 0);
 }
 

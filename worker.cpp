@@ -238,9 +238,10 @@ int Worker::Run(std::string* err) {
     if (!FitsInMemory(EstimateMesh(setup.scene, surfaces, setup.mesh).elements,
                       kWorkerBytesPerElement, UsableMemory(), &why) ||
         !BuildMesh(setup.scene, surfaces, setup.mesh, &mesh_, &why, [&setup] {
-          // The vertices (some 50 bytes an element, in as many blocks as
-          // faces) go back to the system before the elements are made.
-          DropVertices(&setup.scene);
+          // The faces with their vertices (some 65 bytes an element, in as
+          // many blocks as faces) go back to the system before the elements
+          // are made: from here BuildMesh reads only the materials.
+          std::vector<Face>().swap(setup.scene.faces);
           malloc_trim(0);
         }))
       return Fail(why, err);
@@ -248,6 +249,11 @@ int Worker::Run(std::string* err) {
   // Only the mesh is needed from here on: the scene (100-200 bytes a face)
   // is let go rather than kept for the whole run.
   setup.scene = Scene();
+  // Nor the mesh's links back to the scene's faces, which only the
+  // master's results read.
+  std::vector<int32_t>().swap(mesh_.face_scene);
+  std::vector<int>().swap(mesh_.corner_begin);
+  std::vector<glm::dvec3>().swap(mesh_.face_corners);
   // Its hundreds of thousands of small blocks freed go back to the system
   // (glibc keeps them otherwise), before the hemicube's arrays come.
   malloc_trim(0);

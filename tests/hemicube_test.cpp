@@ -67,6 +67,25 @@ TEST(Hemicube, PointToParallelSquareMatchesAnalytic) {
   }
 }
 
+// A face of more than 65,536 vertices: the cache's outlines take 32-bit
+// indices there (16 bits elsewhere), and the column is the same analytic one.
+TEST(Hemicube, FaceOfManyVerticesMatchesAnalytic) {
+  Scene s = EmptyScene();
+  const double e = 1e-3;
+  AddFace(&s, {{-e, -e, 0}, {e, -e, 0}, {e, e, 0}, {-e, e, 0}}, glm::dvec3(0), glm::dvec3(1));
+  AddFace(&s, {{-1, -1, 1}, {-1, 1, 1}, {1, 1, 1}, {1, -1, 1}}, glm::dvec3(1), glm::dvec3(0));
+  MeshOptions o;
+  o.patch_size = 100;  // one patch per face
+  o.elements_per_patch = 260;
+  Mesh m = MakeMesh(s, o);
+  ASSERT_GT(m.faces[1].vend - m.faces[1].vbegin, 65536);
+  Hemicube h(256);
+  std::vector<FormFactor> col;
+  h.Column(m, m.FacePatches(m.faces[0])[0], 0.2, &col);
+  const double exact = 4 * CornerParallel(1.0, 1.0, 1.0);
+  EXPECT_NEAR(SumOverFace(m, col, 1), exact, 0.005 * exact);
+}
+
 TEST(Hemicube, IndependentOfScale) {
   std::vector<double> sums;
   for (double scale : {1e-4, 1.0, 1e4}) {
