@@ -341,6 +341,12 @@ void LeafNeighbours(const Mesh& mesh, int elem, std::vector<int>* out);
 // or a member of a group).
 int SplitPieces(const Mesh& mesh, int patch, std::vector<int>* tops = nullptr);
 void SplitPatch(Mesh* mesh, int patch);
+// Room in the mesh's per-patch arrays for every piece SplitPatch will
+// make of these patches, before a pass splits them: grown split by split
+// those arrays doubled past what the pass needs and stood beside their
+// old copies while they moved (a pass at 10^6 elements makes 10^5 pieces
+// and more; the solver's per-patch arrays follow, Solver::Split).
+void ReserveSplits(Mesh* mesh, const std::vector<int32_t>& patches);
 
 // A hash of the mesh geometry and hierarchy (vertex bits, element
 // vertices, parents), to check that a worker built what the master has

@@ -37,6 +37,7 @@ bool Refine(Mesh* mesh, Solver* solver, Subdivider* subdivider, long shots_in_wa
   // the pass's divisions (doc/protocol.txt, divide).
   const std::vector<int32_t> splits =
       subdivider->SplitPass(*mesh, solver->direct(), solver->DirectDone(), solver->times_shot());
+  ReserveSplits(mesh, splits);
   for (int32_t p : splits) {
     SplitPatch(mesh, p);
     solver->Split(p);

@@ -527,6 +527,14 @@ void Solver::Split(int p) {
   for (size_t q = from; q < n; ++q) pieces.push_back(int(q));
   const MeshFace& face = mesh_.faces[size_t(mesh_.patches[size_t(p)].face)];
   const glm::dvec3 &kd = mesh_.Rho(face), &ke = mesh_.Emission(face);
+  // The room the mesh has for a pass's pieces (ReserveSplits), taken at
+  // once rather than doubled split by split.
+  if (mesh_.patches.capacity() > patch_.capacity()) {
+    const size_t room = mesh_.patches.capacity();
+    patch_.reserve(room), weight_.reserve(room), lit_.reserve(room), blind_.reserve(room);
+    times_shot_.reserve(room), center_.reserve(room);
+    if (!pixel_df_.empty()) pixel_df_.reserve(room);
+  }
   patch_.resize(n);
   for (size_t q = from; q < n; ++q) patch_[q].rho = rho;
   weight_.resize(n);

@@ -47,6 +47,14 @@ int SplitPieces(const Mesh& mesh, int patch, std::vector<int>* tops) {
   return int(tops->size());
 }
 
+void ReserveSplits(Mesh* mesh, const std::vector<int32_t>& patches) {
+  size_t added = 0;
+  for (int32_t p : patches) added += size_t(std::max(SplitPieces(*mesh, p) - 1, 0));
+  mesh->patches.reserve(mesh->patches.size() + added);
+  mesh->patch_tops.reserve(mesh->patch_tops.size() + added);
+  if (!mesh->group_of.empty()) mesh->group_of.reserve(mesh->group_of.size() + added);
+}
+
 void SplitPatch(Mesh* mesh, int patch) {
   std::vector<int> tops;
   CHECK(SplitPieces(*mesh, patch, &tops) > 1);
