@@ -13,14 +13,18 @@
 #include <string>
 
 // The master: mesh, solver, subdivision's adjacency, the hemicube (-j 0)
-// or the scene frame (with workers), the pictures at the end of a wave
-// (measured 362 with -j 0, 302 with -j 1, at 1.06 M elements and 2 shots;
-// about 13% room for scenes that mesh less evenly). A run that divides
-// peaks higher (README, Memory: 529 with -j 0 at its first wave's end).
-constexpr double kMasterBytesPerElement = 410;
+// or the scene frame (with workers), the pictures at the end of a wave.
+// Measured at 1.06 M elements: 308 with -j 0 and 306 with -j 1 over 2
+// shots, but 611 and 575 at the end of a first wave that divided and
+// split 263,927 patches into 537,470 (the picture beside the adjacency,
+// the subdivider's caches and the pieces): the rate is that, with about
+// 13% room, since subdivision's limit (app.cpp) takes it as the cost of
+// every element.
+constexpr double kMasterBytesPerElement = 690;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
-// (measured 250).
-constexpr double kWorkerBytesPerElement = 285;
+// (measured 190 over 2 shots, 277 once that pass's divisions and splits
+// have come).
+constexpr double kWorkerBytesPerElement = 310;
 
 // Bytes this process may still use: physical memory, or less where
 // ulimit -v / -d or a cgroup's memory.max says so.
