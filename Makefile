@@ -166,7 +166,7 @@ FUZZ_CXX     ?= clang++
 FUZZ_SECONDS ?= 60
 FUZZ_B       := build/fuzz
 FUZZ_SAN     := -O1 -g1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
-FUZZ_LIB     := $(addprefix $(FUZZ_B)/,scene.o surface.o mesh.o divide.o split.o groups.o coding.o ffcodec.o protocol.o version.o hosts.o files.o checkpoint.o crypto.o solver.o shooters.o subdivide.o)
+FUZZ_LIB     := $(addprefix $(FUZZ_B)/,scene.o surface.o mesh.o divide.o split.o groups.o coding.o ffcodec.o protocol.o version.o hosts.o files.o checkpoint.o crypto.o solver.o shooters.o subdivide.o memory.o)
 FUZZ_BINS    := $(FUZZ_B)/scene_fuzz $(FUZZ_B)/hosts_fuzz $(FUZZ_B)/protocol_fuzz $(FUZZ_B)/checkpoint_fuzz
 
 $(FUZZ_B)/%.o: %.cpp
