@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 #include <functional>
+#include <type_traits>
 
 #include "check.h"
 #include "groups.h"
@@ -38,6 +39,13 @@ Hemicube::Key Hemicube::KeyOf(const Mesh& mesh) {
     k.last = mesh.verts.back();
   }
   return k;
+}
+
+void Hemicube::ReleaseCache() {
+  key_ = Key();  // no mesh's: the next Column builds the cache again
+  auto drop = [](auto& v) { std::remove_reference_t<decltype(v)>().swap(v); };
+  drop(faces_), drop(by_face_), drop(elem_), drop(outline_), drop(outline_wide_);
+  drop(outline_n_), drop(nodes_), drop(acc_), drop(block_), drop(touched_);
 }
 
 void Hemicube::BuildCache(const Mesh& mesh) {

@@ -19,7 +19,9 @@ class InProcessTransport : public Transport {
   std::string Name(int) const override { return "the master"; }
   Capabilities Caps() const override { return {true}; }
   void Assign(int w, const proto::Assignment& a) override;
-  void Divide(const std::vector<int32_t>&) override {}  // shares the master's mesh
+  // Shares the master's mesh, so nothing to apply; the hemicube's copy of
+  // it is stale now and goes at once (a wave's picture may come next).
+  void Divide(const std::vector<int32_t>&) override { hemicube_.ReleaseCache(); }
   void Poll(double timeout, std::vector<WorkerEvent>* events) override;
   double Now() override;
 

@@ -86,6 +86,22 @@ TEST(Hemicube, FaceOfManyVerticesMatchesAnalytic) {
   EXPECT_NEAR(SumOverFace(m, col, 1), exact, 0.005 * exact);
 }
 
+// A released cache is built again at the next column, which is the same.
+TEST(Hemicube, ReleasedCacheGivesTheSameColumn) {
+  const Mesh m = MakeMesh(Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)}));
+  Hemicube h(64);
+  std::vector<FormFactor> before, after;
+  h.Column(m, 5, 0.3, &before);
+  h.ReleaseCache();
+  h.Column(m, 5, 0.3, &after);
+  ASSERT_FALSE(before.empty());
+  ASSERT_EQ(before.size(), after.size());
+  for (size_t i = 0; i < before.size(); ++i) {
+    EXPECT_EQ(before[i].elem, after[i].elem);
+    EXPECT_EQ(before[i].f, after[i].f);
+  }
+}
+
 TEST(Hemicube, IndependentOfScale) {
   std::vector<double> sums;
   for (double scale : {1e-4, 1.0, 1e4}) {
