@@ -418,7 +418,7 @@ std::string MasterRun::FrameName(int wave) const {
 // The last wave's frame and final.png are the same picture: shaded and
 // rendered once (on a 200,000-face scene each costs seconds). HDR_PATH:
 // also the linear picture there, as Radiance RGBE.
-std::pair<ShadedMesh, float> MasterRun::Picture(const std::vector<glm::dvec3>& b,
+std::pair<ShadedMesh, float> MasterRun::Picture(const ElemB& b,
                                                 const std::vector<std::string>& paths,
                                                 const std::string& hdr_path) {
   std::string err;
@@ -479,9 +479,9 @@ void MasterRun::WriteOutputs() {
   }
 
   // Nothing is shot or divided after the run: of the solver the outputs
-  // read only B (moved out, not copied beside it), and of subdivision
-  // whether it was capped; the rest (some 60 and 14 bytes an element) is
-  // freed before the pictures, the peak of the master's end.
+  // read only B (copied out once the solver's other arrays are gone), and
+  // of subdivision whether it was capped; the rest (some 60 and 14 bytes
+  // an element) is freed before the pictures, the peak of the master's end.
   const std::vector<glm::dvec3> b = solver_->TakeRadiosity();
   const bool capped = subdivider_ && subdivider_->capped();
   solver_.reset();

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "checkpoint.h"
+#include "elemb.h"
 #include "exit_status.h"
 #include "files.h"
 #include "image.h"
@@ -63,7 +64,7 @@ class MasterRun {
   std::string FrameName(int wave) const;
   // Renders the solution `b` (per element) once and writes it to every
   // path (and to hdr_path as Radiance RGBE, if given).
-  std::pair<ShadedMesh, float> Picture(const std::vector<glm::dvec3>& b,
+  std::pair<ShadedMesh, float> Picture(const ElemB& b,
                                        const std::vector<std::string>& paths,
                                        const std::string& hdr_path = "");
   void SaveCheckpoint(const RunState& state);

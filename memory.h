@@ -15,12 +15,12 @@
 // The master: mesh, solver, subdivision's adjacency, the hemicube (-j 0)
 // or the scene frame (with workers), the pictures at the end of a wave.
 // Measured at 1.06 M elements: 308 with -j 0 and 306 with -j 1 over 2
-// shots, but 559 and 575 at the end of a first wave that divided and
+// shots, but 544 and 556 at the end of a first wave that divided and
 // split 263,927 patches into 537,470 (the picture beside the adjacency,
 // the subdivider's caches and the pieces): the rate is that, with about
 // 13% room, since subdivision's limit (app.cpp) takes it as the cost of
 // every element.
-constexpr double kMasterBytesPerElement = 650;
+constexpr double kMasterBytesPerElement = 630;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
 // (measured 190 over 2 shots, 277 once that pass's divisions and splits
 // have come).
