@@ -7,11 +7,11 @@
 #include <cstdint>
 #include <cstring>
 #include <functional>
-#include <type_traits>
 
 #include "check.h"
 #include "groups.h"
 #include "hemicube.h"
+#include "memory.h"
 
 bool Hemicube::Key::operator==(const Key& o) const {
   return mesh == o.mesh && verts == o.verts && elems == o.elems && nverts == o.nverts &&
@@ -43,18 +43,16 @@ Hemicube::Key Hemicube::KeyOf(const Mesh& mesh) {
 
 void Hemicube::ReleaseCache() {
   key_ = Key();  // no mesh's: the next Column builds the cache again
-  auto drop = [](auto& v) { std::remove_reference_t<decltype(v)>().swap(v); };
-  drop(faces_), drop(by_face_), drop(elem_), drop(outline_), drop(outline_wide_);
-  drop(outline_n_), drop(nodes_), drop(acc_), drop(block_), drop(touched_);
+  FreeStorage(&faces_), FreeStorage(&by_face_), FreeStorage(&elem_), FreeStorage(&outline_);
+  FreeStorage(&outline_wide_), FreeStorage(&outline_n_), FreeStorage(&nodes_), FreeStorage(&acc_);
+  FreeStorage(&block_), FreeStorage(&touched_);
 }
 
 void Hemicube::BuildCache(const Mesh& mesh) {
   key_ = KeyOf(mesh);
   // The old cache's largest arrays go first, not kept beside the new ones
   // (a rebuild after divisions).
-  std::vector<CacheFace>().swap(faces_);
-  std::vector<uint16_t>().swap(outline_);
-  std::vector<int32_t>().swap(outline_wide_);
+  FreeStorage(&faces_), FreeStorage(&outline_), FreeStorage(&outline_wide_);
   // First in face order: planes, boxes and ranks (the order a plain
   // z-buffer draws the leaves in, which breaks depth ties).
   std::vector<CacheFace> byface;

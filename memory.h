@@ -34,6 +34,12 @@ double UsableMemory();
 // `bytes_per_element` would not fit in `usable` bytes.
 bool FitsInMemory(double elements, double bytes_per_element, double usable, std::string* err);
 
+// Empties *v and gives its storage back now (clear() keeps the capacity).
+template <class V>
+void FreeStorage(V* v) {
+  V().swap(*v);
+}
+
 // Arrays read at scattered places and larger than the TLB reaches with
 // 4 KB pages (the solver's per element and per patch, at 10^5 of them
 // and more) wait on a page walk per access; backed by 2 MB pages where

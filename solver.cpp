@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <type_traits>
 
 #include "check.h"
 #include "groups.h"
@@ -590,14 +589,13 @@ void Solver::SplitsDone() {
 }
 
 std::vector<glm::dvec3> Solver::TakeRadiosity() {
-  // Swapped with empty ones, so that their memory goes now.
-  auto drop = [](auto& v) { std::remove_reference_t<decltype(v)>().swap(v); };
-  drop(patch_of_), drop(patch_), drop(center_), drop(touched_), drop(is_changed_);
-  drop(noise_), drop(pixel_df_), drop(direct_), drop(changed_), drop(lit_), drop(blind_);
-  drop(times_shot_), drop(weight_), drop(group_dirty_), drop(dirty_groups_), drop(leaves_);
+  FreeStorage(&patch_of_), FreeStorage(&patch_), FreeStorage(&center_), FreeStorage(&touched_);
+  FreeStorage(&is_changed_), FreeStorage(&noise_), FreeStorage(&pixel_df_), FreeStorage(&direct_);
+  FreeStorage(&changed_), FreeStorage(&lit_), FreeStorage(&blind_), FreeStorage(&times_shot_);
+  FreeStorage(&weight_), FreeStorage(&group_dirty_), FreeStorage(&dirty_groups_), FreeStorage(&leaves_);
   queue_ = ShooterQueue();
   std::vector<glm::dvec3> b = radiosity();
-  drop(elem_);
+  FreeStorage(&elem_);
   return b;
 }
 
