@@ -18,11 +18,20 @@
 // Numbers: bounds and powers are double, as the solver's are.
 // Taken shooters (handed to a worker, not yet shot) are kept out of the
 // tree, so that a scheduler asking for the next one many times per shot
-// pays O(log n) per take, not a scan of what it holds. A bound that grew
-// reaches the tree's inner nodes at once (as far up as it is the greatest);
-// one that shrank, at the next Best(): level by level from the shrunk
-// leaves, or all at once when more than a quarter of the shooters shrank
-// or are about to change (Expect).
+// pays O(log n) per take, not a scan of what it holds.
+//
+// The tree has 64 children a node (kFanout): a shot sets the bounds of
+// thousands of shooters scattered over the leaves, and in a binary tree
+// each level a grown bound climbs was a cache line of its own to wait for
+// (at 66,543 shooters the Set calls took as long as the rest of a shot).
+// Here the nodes above the leaves are 1/63 of them (9 KB at 66,543
+// shooters) and stay in the caches, so a Set costs its leaf's line. A
+// bound that grew reaches the inner nodes at once (as far up as it is the
+// greatest); one that shrank, at the next Best(): node by node from the
+// shrunk leaves, or all at once when they are many or most of the
+// shooters are about to change (Expect). Best() looks at a node's 64
+// children's reaches in one contiguous pass and visits them greatest
+// first.
 #ifndef RADIOSITY_SHOOTERS_H
 #define RADIOSITY_SHOOTERS_H
 
@@ -56,8 +65,7 @@ class ShooterQueue {
   // shooters scattered over arrays larger than the caches).
   void Prefetch(int i) const {
     __builtin_prefetch(&taken_[size_t(i)]);
-    __builtin_prefetch(&tree_[leaves_ + size_t(i)], 1);
-    __builtin_prefetch(&tree_[(leaves_ + size_t(i)) / 2], 1);  // where a grown bound's walk goes
+    __builtin_prefetch(&tree_[size_t(i)], 1);
   }
 
   // The untaken shooter with the greatest power(i) > 0, ties to the lowest
@@ -70,25 +78,32 @@ class ShooterQueue {
   long Visited() const { return visited_; }
 
  private:
+  static constexpr size_t kFanout = 64;
   static double Clean(double b) { return b == b ? b : -HUGE_VAL; }  // NaN: out
   void Leaf(int i, double value);
   void Flush();
+  // Node k of level l (0: the leaves, shooter i is leaf i).
+  double& Node(int l, size_t k) { return tree_[first_[size_t(l)] + k]; }
+  double Max(const std::vector<double, HugePageAllocator<double>>& v, int l, size_t k) const;
+  template <class Power>
+  void Visit(int level, size_t node, double drift, const Power& power, int* best, double* best_power);
 
   int n_ = 0;
-  size_t leaves_ = 1;  // n rounded up to a power of two
-  // Node 1 is the root, node k's children are 2k and 2k+1, shooter i is
-  // leaf leaves_ + i (the leaves past n hold -inf). A node holds the
-  // greatest bound of the untaken shooters under it.
+  // The levels one after the other, the leaves first, each padded to whole
+  // groups of kFanout children (-inf bounds, weight 0), up to the root (one
+  // node). first_[l]: where level l starts; first_.size() - 1 is the root's
+  // level. A node holds the greatest bound of the untaken shooters under it.
   // In 2 MB pages (memory.h): a shot sets leaves scattered over them.
   std::vector<double, HugePageAllocator<double>> tree_;
   std::vector<double, HugePageAllocator<double>> weight_;  // the same tree of the weights (taken or not)
+  std::vector<size_t> first_;
   // Per shooter, its bound while it is taken (an untaken one's is its
   // leaf): Set writes one array, not two, for the shooters a shot reaches.
   std::vector<double> bound_;
   std::vector<uint8_t> taken_;
   std::vector<int32_t> dirty_;  // leaves shrunk since the last Flush
   bool rebuild_ = false;        // Expect: every node at the next Flush
-  std::vector<int32_t> stack_;  // Best's scratch, and Flush's
+  std::vector<int32_t> scratch_;  // Flush's
   long visited_ = 0;
 };
 
@@ -98,31 +113,44 @@ int ShooterQueue::Best(double drift, const Power& power) {
   double best_power = 0;
   if (n_ == 0) return best;
   Flush();
-  // Depth first, the larger child first, so that the best is met early
-  // and prunes the rest: a node whose bound plus drift is below the best
-  // power so far (or not above 0 before any) holds nothing better.
-  stack_.clear();
-  stack_.push_back(1);
-  while (!stack_.empty()) {
-    const size_t k = size_t(stack_.back());
-    stack_.pop_back();
-    const double reach = tree_[k] + weight_[k] * drift;
-    if (!(reach >= best_power) || (best < 0 && !(reach > 0))) continue;
-    if (k >= leaves_) {
-      const int i = int(k - leaves_);
-      ++visited_;
-      const double p = power(i);
-      if (p > best_power || (p == best_power && best >= 0 && i < best)) {
-        best_power = p;
-        best = i;
-      }
-      continue;
-    }
-    const bool left_first = tree_[2 * k] >= tree_[2 * k + 1];
-    stack_.push_back(int32_t(left_first ? 2 * k + 1 : 2 * k));
-    stack_.push_back(int32_t(left_first ? 2 * k : 2 * k + 1));
-  }
+  Visit(int(first_.size()) - 1, 0, drift, power, &best, &best_power);
   return best;
+}
+
+// Depth first, the child of greatest reach first, so that the best is
+// met early and prunes the rest (its siblings then in id order): a node
+// whose bound plus drift is below the best power so far (or not above 0
+// before any) holds nothing better.
+template <class Power>
+void ShooterQueue::Visit(int level, size_t node, double drift, const Power& power, int* best,
+                         double* best_power) {
+  const size_t first = first_[size_t(level) - 1] + node * kFanout;
+  double reach[kFanout];
+  for (size_t j = 0; j < kFanout; ++j) {
+    const double r = tree_[first + j] + weight_[first + j] * drift;
+    reach[j] = r == r ? r : -HUGE_VAL;  // -inf + inf (a drift too large to weigh): nothing there
+  }
+  size_t top = 0;
+  for (size_t j = 1; j < kFanout; ++j) top = reach[j] > reach[top] ? j : top;
+  auto visit = [&](size_t c) {
+    const double r = reach[c];
+    if (!(r >= *best_power) || (*best < 0 && !(r > 0))) return;
+    const size_t k = node * kFanout + c;
+    if (level > 1) {
+      Visit(level - 1, k, drift, power, best, best_power);
+      return;
+    }
+    const int i = int(k);
+    ++visited_;
+    const double p = power(i);
+    if (p > *best_power || (p == *best_power && *best >= 0 && i < *best)) {
+      *best_power = p;
+      *best = i;
+    }
+  };
+  visit(top);
+  for (size_t j = 0; j < kFanout; ++j)
+    if (j != top) visit(j);
 }
 
 #endif

@@ -79,6 +79,71 @@ TEST(ShooterQueue, NothingAboveZeroIsNoShooter) {
   EXPECT_EQ(q.Best(0.0, [](int) { return 1.0; }), -1);
 }
 
+// A shot's many Set calls in a row (Expect'ed or not, most bounds
+// growing, some shrinking) between two Best() calls, over sizes that make
+// one to three levels of 64-child nodes with partly filled last nodes,
+// and a Build that grows the shooters keeping the taken: Best() still
+// gives what a scan gives.
+TEST(ShooterQueue, ManySetsAShotPickWhatAFullScanPicks) {
+  std::mt19937 rng(11);
+  for (int n : {63, 64, 65, 130, 4095, 4097, 9000}) {
+    std::uniform_int_distribution<int> id(0, n - 1), coin(0, 7);
+    std::uniform_real_distribution<double> unit(0, 1);
+    std::vector<double> c(n), w(n);
+    std::vector<char> taken(n, 0);
+    double a0 = 0, a = 0;
+    auto power = [&](int i) { return c[i] + w[i] * a; };
+    auto bounds = [&] {
+      std::vector<double> b(c.size());
+      for (size_t i = 0; i < c.size(); ++i) b[i] = c[i] + w[i] * a0;
+      return b;
+    };
+    auto weights = [&] {  // above |w| by more than the powers' rounding
+      std::vector<double> v(w.size());
+      for (size_t i = 0; i < w.size(); ++i) v[i] = w[i] * (1 + 1e-9);
+      return v;
+    };
+    for (int i = 0; i < n; ++i) {
+      c[i] = std::floor(8 * unit(rng)) - 2;  // coarse: ties are common
+      w[i] = std::floor(4 * unit(rng)) / 4;
+    }
+    ShooterQueue q;
+    q.Build(bounds(), weights());
+    for (int step = 0; step < 200; ++step) {
+      const int sets = coin(rng) == 0 ? n / 2 : int(std::sqrt(double(n)));
+      if (coin(rng) < 4) q.Expect(size_t(sets));
+      for (int s = 0; s < sets; ++s) {
+        const int i = id(rng);
+        c[i] += coin(rng) == 0 ? -std::floor(4 * unit(rng)) : std::floor(3 * unit(rng));
+        q.Set(i, c[i] + w[i] * a0);
+      }
+      for (int t = coin(rng); t > 0; --t) {
+        const int i = id(rng);
+        if (taken[i]) q.Release(i); else q.Take(i);
+        taken[i] = !taken[i];
+      }
+      a += (unit(rng) - 0.5) / 4;
+      if (coin(rng) == 0) {  // a re-base, sometimes with more shooters (a split)
+        a0 = a;
+        if (coin(rng) < 2) {
+          const size_t more = size_t(1 + coin(rng));
+          for (size_t k = 0; k < more; ++k) {
+            c.push_back(std::floor(8 * unit(rng)) - 2);
+            w.push_back(0.25);
+            taken.push_back(0);
+          }
+        }
+        q.Build(bounds(), weights());
+      }
+      int want = -1;
+      double best = 0;
+      for (size_t i = 0; i < c.size(); ++i)
+        if (!taken[i] && power(int(i)) > best) best = power(want = int(i));
+      ASSERT_EQ(q.Best(std::abs(a - a0), power), want) << "n " << n << " step " << step;
+    }
+  }
+}
+
 // Pruning works: with no drift and distinct powers, one path is visited.
 TEST(ShooterQueue, VisitsOnlyTheCandidates) {
   const int n = 1 << 12;
