@@ -2,7 +2,6 @@
 
 #include <algorithm>
 
-#include "check.h"
 
 void ShooterQueue::Build(const std::vector<double>& bounds, const std::vector<double>& weights) {
   CHECK(weights.size() == bounds.size());
@@ -48,25 +47,7 @@ void ShooterQueue::Expect(size_t changes) {
   if (4 * changes > size_t(n_)) rebuild_ = true;
 }
 
-// A bound that grew (light arrived) raises the nodes above it to it, up to
-// the first that holds as much: the max of children, one of which grew, is
-// the old max or the new value. Nodes above shrunk leaves not yet flushed
-// may hold too much and stop the walk early; Flush recomputes them from
-// their children later, this leaf's side included.
-void ShooterQueue::Leaf(int i, double value) {
-  const double old = tree_[size_t(i)];
-  tree_[size_t(i)] = value;
-  if (rebuild_) return;  // all at once at the next Best (Expect)
-  if (value >= old) {
-    size_t k = size_t(i);
-    for (int l = 1; l < int(first_.size()); ++l) {
-      k /= kFanout;
-      double& node = Node(l, k);
-      if (node >= value) break;
-      node = value;
-    }
-    return;
-  }
+void ShooterQueue::Shrunk(int i) {
   dirty_.push_back(i);
   if (dirty_.size() > size_t(n_)) Flush();  // no Best() for long: bounded all the same
 }
@@ -108,12 +89,6 @@ void ShooterQueue::Flush() {
     level.swap(up);
     up.clear();
   }
-}
-
-void ShooterQueue::Set(int i, double bound) {
-  CHECK(i >= 0 && i < n_);
-  if (taken_[i]) bound_[i] = Clean(bound);
-  else Leaf(i, Clean(bound));
 }
 
 void ShooterQueue::Take(int i) {

@@ -39,6 +39,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "check.h"
 #include "memory.h"
 
 class ShooterQueue {
@@ -50,8 +51,13 @@ class ShooterQueue {
   void Build(const std::vector<double>& bounds, const std::vector<double>& weights);
   int size() const { return n_; }
 
-  // Shooter i's bound changed.
-  void Set(int i, double bound);
+  // Shooter i's bound changed. Inline, as what it calls: a shot sets
+  // thousands, and a call spills the caller's floating-point registers.
+  void Set(int i, double bound) {
+    CHECK(i >= 0 && i < n_);
+    if (taken_[size_t(i)]) bound_[size_t(i)] = Clean(bound);
+    else Leaf(i, Clean(bound));
+  }
   // About `changes` Set calls follow: when they are more than a quarter of
   // the shooters (a small scene, where one column reaches most patches)
   // the tree is rebuilt at the next Best instead of kept up to date per
@@ -81,6 +87,7 @@ class ShooterQueue {
   static constexpr size_t kFanout = 64;
   static double Clean(double b) { return b == b ? b : -HUGE_VAL; }  // NaN: out
   void Leaf(int i, double value);
+  void Shrunk(int i);
   void Flush();
   // Node k of level l (0: the leaves, shooter i is leaf i).
   double& Node(int l, size_t k) { return tree_[first_[size_t(l)] + k]; }
@@ -106,6 +113,25 @@ class ShooterQueue {
   std::vector<int32_t> scratch_;  // Flush's
   long visited_ = 0;
 };
+
+// A bound that grew (light arrived) raises the nodes above it to it, up to
+// the first that holds as much: the max of children, one of which grew, is
+// the old max or the new value. Nodes above shrunk leaves not yet flushed
+// may hold too much and stop the walk early; Flush recomputes them from
+// their children later, this leaf's side included.
+inline void ShooterQueue::Leaf(int i, double value) {
+  const double old = tree_[size_t(i)];
+  tree_[size_t(i)] = value;
+  if (rebuild_) return;  // all at once at the next Best (Expect)
+  if (!(value >= old)) return Shrunk(i);
+  size_t k = size_t(i);
+  for (int l = 1; l < int(first_.size()); ++l) {
+    k /= kFanout;
+    double& node = Node(l, k);
+    if (node >= value) break;
+    node = value;
+  }
+}
 
 template <class Power>
 int ShooterQueue::Best(double drift, const Power& power) {

@@ -28,7 +28,8 @@ double PixelFormFactor(double pixel_ff, double cos_a) {
 // v / s per channel, exactly as glm's operator/ (each an IEEE division:
 // the same bits), red and green as one two-lane division (GCC's vector
 // extension; SSE2's divpd on x86-64): Shoot divides ρ by an element's area
-// per covered element, and a division is dear.
+// per covered element, and what a patch receives by its area per touched
+// patch, and a division is dear.
 inline glm::dvec3 Over(const glm::dvec3& v, double s) {
   typedef double Pair __attribute__((vector_size(16)));
   Pair rg;
@@ -236,7 +237,7 @@ int Solver::SelectByScan(const std::vector<char>* taken) const {
 // at base_ by at most Σ_c area·ρ_c·|a_c − base_c| <= weight · Σ_c |Δa_c|
 // (weight = area · max ρ): the drift Select adds to every bound, times
 // each patch's weight.
-double Solver::PatchBound(int p) const {
+inline double Solver::PatchBound(int p) const {  // inline: Shoot's touched loop calls it
   if (!overshoot_ || !lit_[p]) return Abs(patch_[p].unshot) * patch_[p].area;
   const glm::dvec3 shared = patch_[p].rho * base_;
   return (Abs(patch_[p].unshot + shared) + 1e-9 * (Abs(patch_[p].unshot) + Abs(shared))) * patch_[p].area;
@@ -388,6 +389,12 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     patch_[q].fsum += f;
   }
   queue_.Expect(touched_.size() + 1);
+  // The running sums in locals: as members, every patch's byte stores
+  // (lit_) and the queue's calls made them a load and a store each, a
+  // chain of store-to-load waits through the loop. The same operations
+  // in the same order: the same bits.
+  double abs_sum = abs_sum_;
+  glm::dvec3 unshot_sum = unshot_sum_;
   for (size_t i = 0; i < touched_.size(); ++i) {
     if (i + kAhead < touched_.size()) {
       const size_t a = size_t(touched_[i + kAhead]);
@@ -402,19 +409,21 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     patch_[q].fsum = 0;
     lit_[q] |= Abs(reflected) > 0;
     if (blind_[q]) continue;  // a hemicube speck: it could not pass it on
-    abs_sum_ -= Abs(patch_[q].unshot) * patch_[q].area;
-    patch_[q].unshot += reflected / patch_[q].area;
-    abs_sum_ += Abs(patch_[q].unshot) * patch_[q].area;
-    unshot_sum_ += reflected;
+    abs_sum -= Abs(patch_[q].unshot) * patch_[q].area;
+    patch_[q].unshot += Over(reflected, patch_[q].area);
+    abs_sum += Abs(patch_[q].unshot) * patch_[q].area;
+    unshot_sum += reflected;
     // Light reaching a group's member moves its group's key, once a shot.
     const int32_t g = mesh_.group_of.empty() ? -1 : mesh_.group_of[size_t(q)];
-    if (g < 0) {
-      queue_.Set(q, Bound(q));
+    if (g < 0) {  // a shooter alone and not blind: its bound is its own
+      queue_.Set(q, PatchBound(q));
     } else if (!group_dirty_[size_t(g)]) {
       group_dirty_[size_t(g)] = 1;
       dirty_groups_.push_back(g);
     }
   }
+  abs_sum_ = abs_sum;
+  unshot_sum_ = unshot_sum;
   for (int32_t g : dirty_groups_) {
     group_dirty_[size_t(g)] = 0;
     const int key = mesh_.groups[size_t(g)].members[0];
