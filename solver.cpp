@@ -336,6 +336,13 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     }
     return pixel_df_[size_t(q)];
   };
+  // Each patch reached is listed at its first form factor (its fsum still
+  // 0) without a branch: written always, counted only then (whether an
+  // element is its patch's first is data, a branch mispredicted often).
+  // Room for every patch and, should a sum stay 0, every form factor.
+  if (touched_.size() < patch_.size() + n) touched_.resize(patch_.size() + n);
+  int32_t* const touched = touched_.data();
+  size_t reached = 0;
   // Its patch's record (ρ, Σ F: one line) is fetched kAhead early too,
   // from its patch id fetched 2 kAhead early.
   for (size_t i = 0; i < n; ++i) {
@@ -379,32 +386,34 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
       if (!one_patch) {  // and split since: each piece reflects its leaves' share
         for (int l : leaves_) {
           const int32_t r = patch_of_[size_t(l)];
-          if (patch_[r].fsum == 0) touched_.push_back(r);
+          touched[reached] = r;
+          reached += patch_[r].fsum == 0;
           patch_[r].fsum += f * (elem_[size_t(l)].area / elem_[size_t(e)].area);
         }
         continue;
       }
     }
-    if (patch_[q].fsum == 0) touched_.push_back(q);
+    touched[reached] = q;
+    reached += patch_[q].fsum == 0;
     patch_[q].fsum += f;
   }
-  queue_.Expect(touched_.size() + 1);
+  queue_.Expect(reached + 1);
   // The running sums in locals: as members, every patch's byte stores
   // (lit_) and the queue's calls made them a load and a store each, a
   // chain of store-to-load waits through the loop. The same operations
   // in the same order: the same bits.
   double abs_sum = abs_sum_;
   glm::dvec3 unshot_sum = unshot_sum_;
-  for (size_t i = 0; i < touched_.size(); ++i) {
-    if (i + kAhead < touched_.size()) {
-      const size_t a = size_t(touched_[i + kAhead]);
+  for (size_t i = 0; i < reached; ++i) {
+    if (i + kAhead < reached) {
+      const size_t a = size_t(touched[i + kAhead]);
       __builtin_prefetch(&patch_[a], 1);
       __builtin_prefetch(&lit_[a], 1);
       __builtin_prefetch(&blind_[a]);
       if (!mesh_.group_of.empty()) __builtin_prefetch(&mesh_.group_of[a]);
       queue_.Prefetch(int(a));
     }
-    const int32_t q = touched_[i];
+    const int32_t q = touched[i];
     const glm::dvec3 reflected = patch_[q].rho * xa * patch_[q].fsum;
     patch_[q].fsum = 0;
     lit_[q] |= Abs(reflected) > 0;
@@ -431,7 +440,6 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   }
   dirty_groups_.clear();
   queue_.Set(p, Bound(p));
-  touched_.clear();
   ++times_shot_[p];
   // The running sums drift by rounding; a full sum every sweep bounds it.
   if (++shots_ % long(patch_.size()) == 0) Resum();

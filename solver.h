@@ -196,7 +196,7 @@ class Solver {
   static_assert(sizeof(PatchShot) == 64, "one cache line");
   std::vector<PatchShot, HugePageAllocator<PatchShot>> patch_;
   std::vector<glm::dvec3> center_;  // per patch, for the noise's direction
-  std::vector<int32_t> touched_;    // patches with fsum != 0
+  std::vector<int32_t> touched_;    // Shoot's scratch: the patches it reached
   std::vector<uint8_t> is_changed_; // per element: in changed_
   std::vector<double> noise_;       // per element when tracked: variance of Lum(B)
   double pixel_ff_ = 0;             // a top-centre pixel's delta form factor; 0: no noise
