@@ -185,6 +185,46 @@ TEST(FfCodec, ColumnRoundTripsWithinTheFormFactorError) {
   EXPECT_TRUE(RoundTrip(e).ff.empty());
 }
 
+// Every form factor comes back as its code's value, whichever way the
+// decoder took: runs of 1 to 20 ids (the first eight of a run written
+// with its codes, the rest one by one, the last few runs with the codes
+// after the runs), without escapes or with one (first, middle, last: the
+// codes are then not where a column without escapes has them), and a
+// code 0 without its escape bytes is refused.
+TEST(FfCodec, ColumnFormFactorsAreTheirCodesValues) {
+  std::mt19937 rng(17);
+  std::vector<std::pair<uint64_t, uint64_t>> runs;
+  std::vector<int32_t> ids;
+  for (int64_t next = 0; ids.size() < 3000;) {
+    const uint64_t gap = runs.empty() ? 0 : 1 + rng() % 300, len = 1 + rng() % 20;
+    runs.push_back({gap, len - 1});
+    for (uint64_t i = 0; i < len; ++i) ids.push_back(int32_t(next + int64_t(gap + i)));
+    next += int64_t(gap + len);
+  }
+  std::vector<uint64_t> codes(ids.size());
+  for (uint64_t& q : codes) q = 1 + rng() % 0xffff;
+  for (long escaped : {-1L, 0L, long(ids.size() / 2), long(ids.size()) - 1}) {
+    std::vector<uint64_t> with = codes;
+    if (escaped >= 0) with[size_t(escaped)] = Esc(Code24(1e-30f));
+    proto::Column d;
+    std::string err;
+    ASSERT_TRUE(proto::DecodeColumn(RawColumn(ids.size(), runs, with), &d, &err)) << err;
+    ASSERT_EQ(d.ff.size(), ids.size());
+    for (size_t i = 0; i < ids.size(); ++i) {
+      ASSERT_EQ(d.ff[i].elem, ids[i]) << i;
+      const float want = long(i) == escaped ? FfValue24(Code24(1e-30f)) : float(Code16Value(uint32_t(codes[i])));
+      ASSERT_EQ(Bits(d.ff[i].f), Bits(want)) << i << " escaped " << escaped;
+    }
+  }
+  for (size_t zero : {size_t(0), ids.size() / 2, ids.size() - 1}) {
+    std::vector<uint64_t> with = codes;
+    with[zero] = 0;  // an escape without its 3 bytes
+    proto::Column d;
+    std::string err;
+    EXPECT_FALSE(proto::DecodeColumn(RawColumn(ids.size(), runs, with), &d, &err)) << zero;
+  }
+}
+
 TEST(FfCodec, ColumnSixteenBitCodesAreTheDocumentedValues) {
   // One column with every code 1 .. 0xffff, in one run from id 0.
   std::vector<uint64_t> codes;
