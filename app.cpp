@@ -134,6 +134,7 @@ MasterRun::MasterRun(const Options& opts) : opts_(opts), run_(opts.run) {}
 MasterRun::~MasterRun() { g_staging = nullptr; }
 
 void MasterRun::Build() {
+  MapLargeArrays();
   std::string err;
   std::vector<std::string> warnings;
   // A closed stderr (piped into head, a gone terminal) is no reason to

@@ -34,6 +34,16 @@ double UsableMemory();
 // `bytes_per_element` would not fit in `usable` bytes.
 bool FitsInMemory(double elements, double bytes_per_element, double usable, std::string* err);
 
+// Arrays of kMappedBytes and more in mappings of their own from here on,
+// given back to the system as soon as they are freed. glibc's threshold
+// for that rises otherwise to the size of each such block freed (up to 32
+// MB), and arrays under it come from the heap, where freed they stay
+// resident: a run's passing arrays (a wave's picture, a division pass's)
+// then raised the peak by 8% of the master's. Called first by the master
+// and by a worker.
+constexpr size_t kMappedBytes = size_t(1) << 20;
+void MapLargeArrays();
+
 // Empties *v and gives its storage back now (clear() keeps the capacity).
 template <class V>
 void FreeStorage(V* v) {

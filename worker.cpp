@@ -307,6 +307,7 @@ int Worker::Run(std::string* err) {
 }  // namespace
 
 int RunWorker(int in_fd, int out_fd, std::string* err) {
+  MapLargeArrays();
   Worker w(in_fd, out_fd);
   return w.Run(err);
 }
