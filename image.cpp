@@ -332,35 +332,66 @@ float AutoExposure(const ShadedMesh& mesh) {
   constexpr double kPercentile = 0.95;
   constexpr double kWhite = 0.8;
   CheckPolys(mesh);
-  // (luminance, weight) per vertex, the weights summed in place and the
-  // vertices without any dropped: one array of 16 bytes a vertex (a
-  // weight array beside it took 24, the master's largest allocation at
-  // the end of a run).
-  std::vector<std::pair<double, double>> lw(mesh.positions().size());
-  for (size_t i = 0; i < lw.size(); ++i) {
+  auto lum_of = [&mesh](size_t i) {
     const glm::dvec3 c(mesh.colors[i]);
-    double lum = 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
-    if (!std::isfinite(lum) || lum < 0) lum = 0;
-    lw[i] = {lum, 0.0};
-  }
+    const double lum = 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
+    return std::isfinite(lum) && lum > 0 ? lum : 0.0;
+  };
+  // A vertex's weight: its share of the polygons round it. 8 bytes a
+  // vertex, the luminance computed again where it is needed (the (luminance,
+  // weight) pairs of every vertex took 16, the master's largest array at a
+  // wave's end).
+  std::vector<double> w(mesh.positions().size(), 0.0);
   for (const auto& q : mesh.polys) {
     const double a = PolyArea(mesh, q);
     if (!std::isfinite(a)) continue;
-    for (int k = 0; k < PolySize(q); ++k) lw[q[k]].second += a / PolySize(q);
+    for (int k = 0; k < PolySize(q); ++k) w[q[k]] += a / PolySize(q);
   }
-  lw.erase(std::remove_if(lw.begin(), lw.end(), [](const std::pair<double, double>& x) { return !(x.second > 0); }),
-           lw.end());
+  // Bins of luminance by the top 16 bits of the double (sign, exponent, 4
+  // bits of mantissa: in the order of the values, as they are >= 0).
+  auto bin = [](double lum) {
+    uint64_t b;
+    std::memcpy(&b, &lum, sizeof b);
+    return size_t(b >> 48);
+  };
+  std::vector<uint32_t> count(size_t(1) << 15, 0);
   double total = 0, brightest = 0;
-  for (const auto& [lum, w] : lw) {
-    total += w;
+  size_t weighted = 0;
+  for (size_t i = 0; i < w.size(); ++i) {
+    if (!(w[i] > 0)) continue;
+    const double lum = lum_of(i);
+    total += w[i];
     brightest = std::max(brightest, lum);
+    ++count[bin(lum)];
+    ++weighted;
   }
-  std::sort(lw.begin(), lw.end());
+  // The weights summed in increasing (luminance, weight) up to the
+  // percentile, a run of bins at a time (about 1/16 of the vertices each,
+  // or one bin, sorted by vertex index): the same sums in the same order
+  // as a sort of all of them, for 4 bytes a vertex of one run.
+  auto before = [&](uint32_t a, uint32_t b) {
+    const double la = lum_of(a), lb = lum_of(b);
+    return la < lb || (!(lb < la) && w[a] < w[b]);
+  };
+  const size_t run = std::max<size_t>(weighted / 16, 1);
+  std::vector<uint32_t> in;
   double level = 0, sum = 0;
-  for (const auto& [lum, w] : lw) {
-    sum += w;
-    level = lum;
-    if (sum >= kPercentile * total) break;
+  bool reached = false;
+  for (size_t lo = 0, hi = 0; lo < count.size() && !reached; lo = hi) {
+    size_t m = 0;
+    while (hi < count.size() && (m == 0 || m + count[hi] <= run)) m += count[hi++];
+    in.clear();
+    for (size_t i = 0; i < w.size() && m > 0; ++i) {
+      if (!(w[i] > 0)) continue;
+      const size_t b = bin(lum_of(i));
+      if (b >= lo && b < hi) in.push_back(uint32_t(i));
+    }
+    std::sort(in.begin(), in.end(), before);
+    for (uint32_t i : in) {
+      sum += w[i];
+      level = lum_of(i);
+      if ((reached = sum >= kPercentile * total)) break;
+    }
   }
   if (!(level > 0)) level = brightest;
   if (!(level > 0)) return 1.0f;
