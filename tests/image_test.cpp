@@ -376,35 +376,36 @@ float ExposureBySort(const ShadedMesh& mesh) {
 }
 
 // Grids of quads sharing their corners (weights summed from up to four),
-// uneven cells, luminances with ties, zeros, NaN, a few bright ones, and
-// vertices no polygon uses (bright, and left out): the same exposure, to
-// the bit, as the sort of all of them.
+// uneven cells, luminances with ties, zeros, NaN, a few bright ones, most
+// of them close together (one bin of many values) or not, and vertices no
+// polygon uses (bright, and left out): the same exposure, to the bit, as
+// the sort of all of them.
 TEST(Image, AutoExposureIsTheWeightedPercentileOfASort) {
   std::mt19937 rng(7);
-  for (int n : {2, 9, 70}) {
-    for (int palette : {1, 5, 1000}) {
-      ShadedMesh m;
-      std::uniform_real_distribution<double> jitter(0.0, 0.4);
-      std::uniform_int_distribution<int> pick(0, palette - 1);
-      for (int y = 0; y <= n; ++y)
-        for (int x = 0; x <= n; ++x) {
-          m.own.push_back({x + jitter(rng), y + jitter(rng), 0});
-          const int c = pick(rng);
-          const float v = c == 0 ? 0.0f : c == 1 ? NAN : c < 4 ? 1000.0f : float(c) / 7;
-          m.colors.push_back(glm::vec3(v, v / 2, c % 3 ? v : 0.0f));
+  for (int n : {2, 9, 70})
+    for (float spread : {1.0f / 7, 1e-6f})
+      for (int palette : {1, 5, 1000}) {
+        ShadedMesh m;
+        std::uniform_real_distribution<double> jitter(0.0, 0.4);
+        std::uniform_int_distribution<int> pick(0, palette - 1);
+        for (int y = 0; y <= n; ++y)
+          for (int x = 0; x <= n; ++x) {
+            m.own.push_back({x + jitter(rng), y + jitter(rng), 0});
+            const int c = pick(rng);
+            const float v = c == 0 ? 0.0f : c == 1 ? NAN : c < 4 ? 1000.0f : 0.5f + float(c) * spread;
+            m.colors.push_back(glm::vec3(v, v / 2, c % 3 ? v : 0.0f));
+          }
+        for (int y = 0; y < n; ++y)
+          for (int x = 0; x < n; ++x) {
+            const int a = y * (n + 1) + x;
+            m.polys.push_back({a, a + 1, a + n + 2, (x + y) % 5 ? a + n + 1 : -1});
+          }
+        for (int k = 0; k < 10; ++k) {
+          m.own.push_back({0, 0, 1});
+          m.colors.push_back(glm::vec3(1e6f));
         }
-      for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-          const int a = y * (n + 1) + x;
-          m.polys.push_back({a, a + 1, a + n + 2, (x + y) % 5 ? a + n + 1 : -1});
-        }
-      for (int k = 0; k < 10; ++k) {
-        m.own.push_back({0, 0, 1});
-        m.colors.push_back(glm::vec3(1e6f));
+        EXPECT_EQ(AutoExposure(m), ExposureBySort(m)) << n << " " << spread << " " << palette;
       }
-      EXPECT_EQ(AutoExposure(m), ExposureBySort(m)) << n << " " << palette;
-    }
-  }
 }
 
 TEST_F(ImageFiles, WriteImagePpmAndPng) {
