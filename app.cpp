@@ -134,6 +134,7 @@ MasterRun::MasterRun(const Options& opts) : opts_(opts), run_(opts.run) {}
 MasterRun::~MasterRun() { g_staging = nullptr; }
 
 void MasterRun::Build() {
+  MapLargeArrays();
   std::string err;
   std::vector<std::string> warnings;
   // A closed stderr (piped into head, a gone terminal) is no reason to
@@ -423,9 +424,10 @@ std::pair<ShadedMesh, float> MasterRun::Picture(const ElemB& b,
                                                 const std::string& hdr_path) {
   std::string err;
   ShadedMesh shaded = Shade(mesh_, b);
+  // Its arrays gone before the picture's pixels come.
+  const float exposure = AutoExposure(shaded);
   Image img;
   Render(shaded, camera_, opts_.width, opts_.height, &img);
-  const float exposure = AutoExposure(shaded);
   for (const std::string& path : paths)
     if (!WriteImage(img, exposure, path, opts_.format, &err)) Die(kExitFailure, err);
   if (!hdr_path.empty() && !WriteRadianceHdr(img, hdr_path, &err)) Die(kExitFailure, err);

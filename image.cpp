@@ -332,35 +332,99 @@ float AutoExposure(const ShadedMesh& mesh) {
   constexpr double kPercentile = 0.95;
   constexpr double kWhite = 0.8;
   CheckPolys(mesh);
-  // (luminance, weight) per vertex, the weights summed in place and the
-  // vertices without any dropped: one array of 16 bytes a vertex (a
-  // weight array beside it took 24, the master's largest allocation at
-  // the end of a run).
-  std::vector<std::pair<double, double>> lw(mesh.positions().size());
-  for (size_t i = 0; i < lw.size(); ++i) {
+  auto lum_of = [&mesh](size_t i) {
     const glm::dvec3 c(mesh.colors[i]);
-    double lum = 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
-    if (!std::isfinite(lum) || lum < 0) lum = 0;
-    lw[i] = {lum, 0.0};
-  }
+    const double lum = 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
+    return std::isfinite(lum) && lum > 0 ? lum : 0.0;
+  };
+  // A vertex's weight: its share of the polygons round it, and its
+  // luminance's bin: 10 bytes a vertex, the luminance computed again where
+  // it is needed (the (luminance, weight) pairs of every vertex took 16,
+  // the master's largest array at a wave's end).
+  std::vector<double> w(mesh.positions().size(), 0.0);
   for (const auto& q : mesh.polys) {
     const double a = PolyArea(mesh, q);
     if (!std::isfinite(a)) continue;
-    for (int k = 0; k < PolySize(q); ++k) lw[q[k]].second += a / PolySize(q);
+    for (int k = 0; k < PolySize(q); ++k) w[q[k]] += a / PolySize(q);
   }
-  lw.erase(std::remove_if(lw.begin(), lw.end(), [](const std::pair<double, double>& x) { return !(x.second > 0); }),
-           lw.end());
+  // Bins of luminance by the top 16 bits of the double (sign, exponent, 4
+  // bits of mantissa: in the order of the values, as they are >= 0).
+  constexpr uint16_t kNoBin = 0xffff;  // no weight: left out
+  std::vector<uint16_t> bin_of(w.size(), kNoBin);
+  std::vector<uint32_t> count(size_t(1) << 15, 0);
   double total = 0, brightest = 0;
-  for (const auto& [lum, w] : lw) {
-    total += w;
+  size_t weighted = 0;
+  for (size_t i = 0; i < w.size(); ++i) {
+    if (!(w[i] > 0)) continue;
+    const double lum = lum_of(i);
+    total += w[i];
     brightest = std::max(brightest, lum);
+    uint64_t bits;
+    std::memcpy(&bits, &lum, sizeof bits);
+    bin_of[i] = uint16_t(bits >> 48);
+    ++count[bin_of[i]];
+    ++weighted;
   }
-  std::sort(lw.begin(), lw.end());
+  // The weights summed in increasing (luminance, weight) up to the
+  // percentile, a run of bins at a time (about 1/16 of the vertices each,
+  // or one bin), sorted: the same sums in the same order as a sort of all
+  // of them, for a run's (luminance, weight) pairs, 16 bytes each, or,
+  // for one bin larger than that (those still dark early in a run, all of
+  // luminance 0), its vertices' indices, 4.
+  const size_t run = std::max<size_t>(weighted / 16, 1);
+  struct Run {
+    size_t end, vertices;  // its last bin + 1, its vertices
+  };
+  std::vector<Run> runs;
+  size_t largest = 0;
+  for (size_t hi = 0; hi < count.size();) {
+    size_t m = 0;
+    while (hi < count.size() && (m == 0 || m + count[hi] <= run)) m += count[hi++];
+    if (m == 0) break;  // empty bins to the end
+    runs.push_back({hi, m});
+    if (m > run) largest = std::max(largest, m);
+  }
+  std::vector<std::pair<double, double>> lw;
+  lw.reserve(run);
+  std::vector<uint32_t> in;
+  in.reserve(largest);
+  auto before = [&](uint32_t a, uint32_t b) {
+    const std::pair<double, double> pa(lum_of(a), w[a]), pb(lum_of(b), w[b]);
+    return pa < pb;
+  };
   double level = 0, sum = 0;
-  for (const auto& [lum, w] : lw) {
-    sum += w;
+  bool reached = false;
+  auto add = [&](double lum, double weight) {
+    sum += weight;
     level = lum;
-    if (sum >= kPercentile * total) break;
+    return reached = sum >= kPercentile * total;
+  };
+  for (size_t r = 0, lo = 0; r < runs.size() && !reached; lo = runs[r++].end) {
+    const size_t hi = runs[r].end;
+    const bool big = runs[r].vertices > run;  // one bin
+    lw.clear();
+    in.clear();
+    double least = HUGE_VAL, most = 0;
+    for (size_t i = 0; i < w.size(); ++i) {
+      if (bin_of[i] == kNoBin || bin_of[i] < lo || bin_of[i] >= hi) continue;
+      if (!big) {
+        lw.emplace_back(lum_of(i), w[i]);
+        continue;
+      }
+      in.push_back(uint32_t(i));
+      least = std::min(least, lum_of(i));
+      most = std::max(most, lum_of(i));
+    }
+    std::sort(lw.begin(), lw.end());
+    for (const auto& [lum, weight] : lw)
+      if (add(lum, weight)) break;
+    // One luminance (the dark vertices' 0): the weights' order.
+    if (least == most)
+      std::sort(in.begin(), in.end(), [&](uint32_t a, uint32_t b) { return w[a] < w[b]; });
+    else
+      std::sort(in.begin(), in.end(), before);
+    for (uint32_t i : in)
+      if (add(lum_of(i), w[i])) break;
   }
   if (!(level > 0)) level = brightest;
   if (!(level > 0)) return 1.0f;

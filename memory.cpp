@@ -1,5 +1,6 @@
 #include "memory.h"
 
+#include <malloc.h>
 #include <sys/mman.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -36,6 +37,8 @@ double UsableMemory() {
   if (cg >> limit) usable = std::min(usable, limit);
   return std::max(usable, 0.0);
 }
+
+void MapLargeArrays() { mallopt(M_MMAP_THRESHOLD, int(kMappedBytes)); }
 
 bool FitsInMemory(double elements, double bytes_per_element, double usable, std::string* err) {
   const double need = elements * bytes_per_element;

@@ -14,17 +14,17 @@
 
 // The master: mesh, solver, subdivision's adjacency, the hemicube (-j 0)
 // or the scene frame (with workers), the pictures at the end of a wave.
-// Measured at 1.06 M elements: 308 with -j 0 and 306 with -j 1 over 2
-// shots, but 544 and 556 at the end of a first wave that divided and
-// split 263,927 patches into 537,470 (the picture beside the adjacency,
-// the subdivider's caches and the pieces): the rate is that, with about
+// Measured at 1.06 M elements: 292 with -j 0 and 258 with -j 1 over 2
+// shots, but 456 and 462 in a first wave that divided and split 263,927
+// patches into 537,470 (its division pass: the adjacency, the solver
+// grown for the children and the pieces): the rate is that, with about
 // 13% room, since subdivision's limit (app.cpp) takes it as the cost of
 // every element.
-constexpr double kMasterBytesPerElement = 630;
+constexpr double kMasterBytesPerElement = 520;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
-// (measured 190 over 2 shots, 277 once that pass's divisions and splits
-// have come).
-constexpr double kWorkerBytesPerElement = 310;
+// (measured 189 over 2 shots; 210 to 242 once that pass's divisions and
+// splits have come, its hemicube cache rebuilt beside the adjacency).
+constexpr double kWorkerBytesPerElement = 275;
 
 // Bytes this process may still use: physical memory, or less where
 // ulimit -v / -d or a cgroup's memory.max says so.
@@ -33,6 +33,16 @@ double UsableMemory();
 // False with *err (one line, no prefix) when `elements` elements at
 // `bytes_per_element` would not fit in `usable` bytes.
 bool FitsInMemory(double elements, double bytes_per_element, double usable, std::string* err);
+
+// Arrays of kMappedBytes and more in mappings of their own from here on,
+// given back to the system as soon as they are freed. glibc's threshold
+// for that rises otherwise to the size of each such block freed (up to 32
+// MB), and arrays under it come from the heap, where freed they stay
+// resident: a run's passing arrays (a wave's picture, a division pass's)
+// then raised the peak by 8% of the master's. Called first by the master
+// and by a worker.
+constexpr size_t kMappedBytes = size_t(1) << 20;
+void MapLargeArrays();
 
 // Empties *v and gives its storage back now (clear() keeps the capacity).
 template <class V>

@@ -278,7 +278,7 @@ MeshEstimate EstimateMesh(const Scene& scene, const std::vector<Surface>& surfac
                           const MeshOptions& opts);
 
 // The most elements a mesh may have, built or divided. The master needs
-// about 0.63 KB per element (memory.h), so this is about 5 GB.
+// about 0.52 KB per element (memory.h), so this is about 4 GB.
 constexpr int kMaxElements = 8'000'000;
 
 // Geometry shared by building (mesh.cpp) and division (divide.cpp).

@@ -127,20 +127,25 @@ void Subdivider::FindNear(const Mesh& mesh, size_t from) {
   std::nth_element(widths.begin(), widths.begin() + long(widths.size() / 2), widths.end());
   const double cell = opts_.split_near * widths[widths.size() / 2];
   if (!(cell > 0)) return;
+  // 16 bytes a top element, reserved to their count: the centroids (24
+  // bytes more) are computed again where a cell is searched, and grown by
+  // doubling the array stood at three times its size while it moved, the
+  // master's peak in a dividing run (the whole mesh's tops, every pass).
   struct Top {
     uint64_t key;
     int32_t e;
-    glm::dvec3 c;
   };
-  std::vector<Top> tops;
+  size_t count = 0;
   glm::dvec3 lo(HUGE_VAL);
-  for (size_t p = 0; p < mesh.patches.size(); ++p)
-    for (int e : mesh.Tops(int(p))) {
-      tops.push_back({0, e, mesh.Centroid(e)});
-      lo = glm::min(lo, tops.back().c);
-    }
+  for (size_t p = 0; p < mesh.patches.size(); ++p) {
+    count += mesh.Tops(int(p)).size();
+    for (int e : mesh.Tops(int(p))) lo = glm::min(lo, mesh.Centroid(e));
+  }
   auto cell_of = [&](const glm::dvec3& x) { return glm::ivec3(glm::floor((x - lo) / cell)); };
-  for (Top& t : tops) t.key = CellKey(cell_of(t.c));
+  std::vector<Top> tops;
+  tops.reserve(count);
+  for (size_t p = 0; p < mesh.patches.size(); ++p)
+    for (int e : mesh.Tops(int(p))) tops.push_back({CellKey(cell_of(mesh.Centroid(e))), e});
   std::sort(tops.begin(), tops.end(),
             [](const Top& a, const Top& b) { return a.key != b.key ? a.key < b.key : a.e < b.e; });
   for (size_t p = from; p < n; ++p) {
@@ -153,7 +158,7 @@ void Subdivider::FindNear(const Mesh& mesh, size_t from) {
       if (mesh.elems[size_t(t.e)].patch >= 0 &&
           mesh.patches[size_t(mesh.elems[size_t(t.e)].patch)].face == patch.face)
         return false;
-      const glm::dvec3 d = t.c - c0;
+      const glm::dvec3 d = mesh.Centroid(t.e) - c0;
       return glm::dot(d, normal) > 0 && glm::dot(mesh.FaceOf(t.e).normal, d) < 0 &&
              glm::dot(d, d) < r * r;
     };

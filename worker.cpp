@@ -111,6 +111,9 @@ class Worker {
   Sender out_;
   proto::FrameReader in_;
   Mesh mesh_;
+  // Made once the scene is in (its resolution comes with it); a member so
+  // that division edits can free its copy of the mesh (Handle).
+  std::unique_ptr<Hemicube> hemicube_;
   struct Todo {
     proto::Assignment a;
     double received;  // for Column::wait_s
@@ -169,6 +172,11 @@ bool Worker::Handle(proto::Msg type, const std::string& payload, int* status,
     case proto::Msg::kDivide: {
       std::vector<int32_t> elems;
       if (!proto::DecodeDivide(payload, &elems, &why)) break;
+      // The mesh changes, so the next column rebuilds the hemicube's copy
+      // of it anyway: freed now, it does not stand beside the adjacency
+      // the first division makes and the children (the worker's peak in
+      // a dividing run).
+      if (hemicube_) hemicube_->ReleaseCache();
       for (int32_t e : elems) {
         // Divide() and SplitPatch() CHECK these; from the wire they are
         // input, not invariants. ~p: split patch p.
@@ -262,7 +270,7 @@ int Worker::Run(std::string* err) {
   setup_heartbeat.reset();
   if (!out_.Send(frame)) return kExitOk;
 
-  Hemicube hemicube(setup.resolution);
+  hemicube_ = std::make_unique<Hemicube>(setup.resolution);
   Heartbeat heartbeat(&out_, setup.heartbeat_s);
   double heard = MonotonicSeconds();
   for (;;) {
@@ -288,7 +296,7 @@ int Worker::Run(std::string* err) {
     col.wait_s = MonotonicSeconds() - todo_.front().received;
     todo_.pop_front();
     const double t0 = ThreadCpuSeconds();
-    ShotColumn(&hemicube, mesh_, a.patch, a.k, setup.rotate, setup.seed, &col.ff);
+    ShotColumn(hemicube_.get(), mesh_, a.patch, a.k, setup.rotate, setup.seed, &col.ff);
     col.compute_s = ThreadCpuSeconds() - t0;
     frame.clear();
     proto::EncodeColumn(col, &frame);
@@ -299,6 +307,7 @@ int Worker::Run(std::string* err) {
 }  // namespace
 
 int RunWorker(int in_fd, int out_fd, std::string* err) {
+  MapLargeArrays();
   Worker w(in_fd, out_fd);
   return w.Run(err);
 }

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <random>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -332,6 +333,79 @@ TEST(Image, AutoExposure) {
   AddSquare(&tiny, 0, 0, 0, 1, glm::vec3(std::numeric_limits<float>::denorm_min()));
   const float t = AutoExposure(tiny);
   EXPECT_TRUE(std::isfinite(t) && t > 0);
+}
+
+// The exposure as one sort of every weighted vertex's (luminance, weight)
+// finds it: what AutoExposure does a run of luminances at a time.
+float ExposureBySort(const ShadedMesh& mesh) {
+  std::vector<std::pair<double, double>> lw(mesh.positions().size());
+  for (size_t i = 0; i < lw.size(); ++i) {
+    const glm::dvec3 c(mesh.colors[i]);
+    double lum = 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
+    if (!std::isfinite(lum) || lum < 0) lum = 0;
+    lw[i] = {lum, 0.0};
+  }
+  for (const auto& q : mesh.polys) {
+    const int n = q[3] < 0 ? 3 : 4;
+    // image.cpp's PolyArea.
+    const auto& p = mesh.positions();
+    const glm::dvec3 d = n == 3 ? glm::cross(p[size_t(q[1])] - p[size_t(q[0])], p[size_t(q[2])] - p[size_t(q[0])])
+                                : glm::cross(p[size_t(q[2])] - p[size_t(q[0])], p[size_t(q[3])] - p[size_t(q[1])]);
+    const double a = 0.5 * glm::length(d);
+    if (!std::isfinite(a)) continue;
+    for (int k = 0; k < n; ++k) lw[size_t(q[k])].second += a / n;
+  }
+  lw.erase(std::remove_if(lw.begin(), lw.end(), [](const auto& x) { return !(x.second > 0); }),
+           lw.end());
+  double total = 0, brightest = 0;
+  for (const auto& [lum, w] : lw) {
+    total += w;
+    brightest = std::max(brightest, lum);
+  }
+  std::sort(lw.begin(), lw.end());
+  double level = 0, sum = 0;
+  for (const auto& [lum, w] : lw) {
+    sum += w;
+    level = lum;
+    if (sum >= 0.95 * total) break;
+  }
+  if (!(level > 0)) level = brightest;
+  if (!(level > 0)) return 1.0f;
+  return float(std::clamp(0.8 / level, double(std::numeric_limits<float>::min()),
+                          double(std::numeric_limits<float>::max())));
+}
+
+// Grids of quads sharing their corners (weights summed from up to four),
+// uneven cells, luminances with ties, zeros, NaN, a few bright ones, most
+// of them close together (one bin of many values) or not, and vertices no
+// polygon uses (bright, and left out): the same exposure, to the bit, as
+// the sort of all of them.
+TEST(Image, AutoExposureIsTheWeightedPercentileOfASort) {
+  std::mt19937 rng(7);
+  for (int n : {2, 9, 70})
+    for (float spread : {1.0f / 7, 1e-6f})
+      for (int palette : {1, 5, 1000}) {
+        ShadedMesh m;
+        std::uniform_real_distribution<double> jitter(0.0, 0.4);
+        std::uniform_int_distribution<int> pick(0, palette - 1);
+        for (int y = 0; y <= n; ++y)
+          for (int x = 0; x <= n; ++x) {
+            m.own.push_back({x + jitter(rng), y + jitter(rng), 0});
+            const int c = pick(rng);
+            const float v = c == 0 ? 0.0f : c == 1 ? NAN : c < 4 ? 1000.0f : 0.5f + float(c) * spread;
+            m.colors.push_back(glm::vec3(v, v / 2, c % 3 ? v : 0.0f));
+          }
+        for (int y = 0; y < n; ++y)
+          for (int x = 0; x < n; ++x) {
+            const int a = y * (n + 1) + x;
+            m.polys.push_back({a, a + 1, a + n + 2, (x + y) % 5 ? a + n + 1 : -1});
+          }
+        for (int k = 0; k < 10; ++k) {
+          m.own.push_back({0, 0, 1});
+          m.colors.push_back(glm::vec3(1e6f));
+        }
+        EXPECT_EQ(AutoExposure(m), ExposureBySort(m)) << n << " " << spread << " " << palette;
+      }
 }
 
 TEST_F(ImageFiles, WriteImagePpmAndPng) {

@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "ffcodec.h"
 #include "hemicube.h"
 #include "protocol.h"
 #include "peer.h"
@@ -108,6 +109,49 @@ TEST_F(WorkerTest, ComputesColumnsInOrderAndLeavesOnBye) {
   master_->Send(f);
   End();
   EXPECT_EQ(status_, 0) << err_;
+}
+
+// Division edits between columns (which free the worker's hemicube cache):
+// the next column is drawn on the divided mesh, its children included.
+TEST_F(WorkerTest, AColumnAfterDivisionsSeesTheDividedMesh) {
+  Handshake();
+  Mesh m = MakeMesh(setup_.scene);
+  Hemicube h(16);
+  std::string f;
+  proto::EncodeWork({{1, 0}}, &f);
+  master_->Send(f);
+  auto column = [&](const proto::Assignment& a) {
+    std::string payload, err;
+    Msg type = Next(&payload);
+    while (type == Msg::kHeartbeat) type = Next(&payload);
+    ASSERT_EQ(type, Msg::kColumn);
+    proto::Column c;
+    ASSERT_TRUE(proto::DecodeColumn(payload, &c, &err)) << err;
+    std::vector<FormFactor> want;
+    ShotColumn(&h, m, a.patch, a.k, false, 1, &want);
+    ASSERT_EQ(c.ff.size(), want.size());
+    for (size_t i = 0; i < want.size(); ++i) {
+      EXPECT_EQ(c.ff[i].elem, want[i].elem) << i;
+      EXPECT_NEAR(c.ff[i].f, want[i].f, proto::kFormFactorError * want[i].f) << i;
+    }
+  };
+  column({1, 0});
+  // Every top element of the last face divided: its children receive
+  // from patch 1 (of another face).
+  ASSERT_NE(m.patches[1].face, int(m.faces.size()) - 1);
+  std::vector<int32_t> divided;
+  for (int p : m.FacePatches(m.faces.back()))
+    for (int e : m.Tops(p)) divided.push_back(e);
+  const int32_t before = int32_t(m.elems.size());
+  for (int32_t e : divided) Divide(&m, e);
+  f.clear();
+  proto::EncodeDivide(divided, &f);
+  proto::EncodeWork({{1, 1}}, &f);
+  master_->Send(f);
+  column({1, 1});
+  std::vector<FormFactor> want;
+  ShotColumn(&h, m, 1, 1, false, 1, &want);
+  EXPECT_GE(want.back().elem, before);  // a child's, which column() compared
 }
 
 // A large scene takes long to arrive and to mesh: the worker says that it
