@@ -5,6 +5,8 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "check.h"
+
 namespace {
 
 struct Cell {
@@ -187,47 +189,57 @@ class Grouper {
 
   // A bounding-volume tree of the elements' boxes: the elements in the
   // Morton order of their boxes' centres, kLeaf to a leaf, each level
-  // above the union of two boxes of the one below, up to one root.
+  // above the union of two boxes of the one below, up to one root. The
+  // order is only the search's speed: every search is exact whatever the
+  // tree (Nearest), so the codes are coarse enough to hold the element's
+  // id below them, and sorted by radix (stable: ties stay in id order).
   void BuildTree() {
     const size_t n = m_.elems.size();
-    // An element's bounding box, made again where needed rather than
-    // kept by id beside the boxes in the tree's order.
-    auto bound = [&](size_t e, glm::dvec3* lo, glm::dvec3* hi) {
+    CHECK(n <= size_t{1} << kIdBits);
+    // The boxes by element id first (the mesh read in its own order), in
+    // the tree's order once sorted.
+    std::vector<glm::dvec3> lo_by_id(n), hi_by_id(n);
+    for (size_t e = 0; e < n; ++e) {
       const Element& el = m_.elems[e];
-      *lo = *hi = m_.verts[size_t(el.v[0])];
+      glm::dvec3 lo = m_.verts[size_t(el.v[0])], hi = lo;
       for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k) {
-        *lo = glm::min(*lo, m_.verts[size_t(el.v[k])]);
-        *hi = glm::max(*hi, m_.verts[size_t(el.v[k])]);
+        lo = glm::min(lo, m_.verts[size_t(el.v[k])]);
+        hi = glm::max(hi, m_.verts[size_t(el.v[k])]);
       }
-    };
-    glm::dvec3 lo(0.0), hi(0.0), a, b;
-    for (size_t e = 0; e < n; ++e) {
-      bound(e, &a, &b);
-      lo = e ? glm::min(lo, a) : a;
-      hi = e ? glm::max(hi, b) : b;
+      lo_by_id[e] = lo;
+      hi_by_id[e] = hi;
     }
-    const glm::dvec3 scale = double(1 << 21) / glm::max(hi - lo, glm::dvec3(1e-300));
-    std::vector<std::pair<uint64_t, int>> keyed(n);
+    glm::dvec3 lo(0.0), hi(0.0);
     for (size_t e = 0; e < n; ++e) {
-      bound(e, &a, &b);
-      const glm::dvec3 q = glm::clamp((0.5 * (a + b) - lo) * scale, 0.0, double((1 << 21) - 1));
-      keyed[e] = {Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 | Spread(uint64_t(q.z)) << 2,
-                  int(e)};
+      lo = e ? glm::min(lo, lo_by_id[e]) : lo_by_id[e];
+      hi = e ? glm::max(hi, hi_by_id[e]) : hi_by_id[e];
     }
-    std::sort(keyed.begin(), keyed.end());
-    // The boxes in the tree's order: a leaf's are read in a row.
+    const glm::dvec3 scale = double(1 << kAxisBits) / glm::max(hi - lo, glm::dvec3(1e-300));
+    std::vector<uint64_t> keyed(n);
+    for (size_t e = 0; e < n; ++e) {
+      const glm::dvec3 q = glm::clamp((0.5 * (lo_by_id[e] + hi_by_id[e]) - lo) * scale, 0.0,
+                                      double((1 << kAxisBits) - 1));
+      keyed[e] = (Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 | Spread(uint64_t(q.z)) << 2)
+                     << kIdBits |
+                 e;
+    }
+    RadixSort(&keyed, kIdBits);
     order_.resize(n);
     elo_.resize(n);
     ehi_.resize(n);
     patch_of_.resize(n);
     slot_of_.resize(n);
     for (size_t i = 0; i < n; ++i) {
-      order_[i] = keyed[i].second;
-      slot_of_[size_t(order_[i])] = int(i);
-      bound(size_t(order_[i]), &elo_[i], &ehi_[i]);
-      patch_of_[i] = m_.elems[size_t(order_[i])].patch;
+      const size_t e = size_t(keyed[i] & ((uint64_t{1} << kIdBits) - 1));
+      order_[i] = int(e);
+      slot_of_[e] = int(i);
+      elo_[i] = lo_by_id[e];
+      ehi_[i] = hi_by_id[e];
+      patch_of_[i] = m_.elems[e].patch;
     }
-    std::vector<std::pair<uint64_t, int>>().swap(keyed);
+    std::vector<uint64_t>().swap(keyed);
+    std::vector<glm::dvec3>().swap(lo_by_id);
+    std::vector<glm::dvec3>().swap(hi_by_id);
     levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
     for (size_t i = 0; i < n; ++i) {
       const PatchInfo& in = info_[size_t(patch_of_[i])];
@@ -238,6 +250,20 @@ class Grouper {
       std::vector<Box> up((below.size() + 1) / 2);
       for (size_t i = 0; i < below.size(); ++i) Extend(&up[i / 2], below[i], i % 2 == 0);
       levels_.push_back(std::move(up));
+    }
+  }
+
+  // Sorts *keys by their bits from `from` up, stably (least significant
+  // byte first; a byte all keys share is skipped).
+  static void RadixSort(std::vector<uint64_t>* keys, int from) {
+    std::vector<uint64_t> tmp(keys->size());
+    for (int shift = from; shift < 64; shift += 8) {
+      std::array<size_t, 257> at{};
+      for (uint64_t k : *keys) ++at[((k >> shift) & 0xff) + 1];
+      if (std::find(at.begin(), at.end(), keys->size()) != at.end()) continue;
+      for (size_t b = 0; b < 256; ++b) at[b + 1] += at[b];
+      for (uint64_t k : *keys) tmp[at[(k >> shift) & 0xff]++] = k;
+      keys->swap(tmp);
     }
   }
 
@@ -267,7 +293,8 @@ class Grouper {
     return m.x + m.y + m.z - b.off > eps_;
   }
 
-  // The bits of x (21) spread to every third bit: one axis of a Morton code.
+  // The bits of x (kAxisBits, at most 21) spread to every third bit: one
+  // axis of a Morton code.
   static uint64_t Spread(uint64_t x) {
     x &= 0x1fffff;
     x = (x | x << 32) & 0x1f00000000ffffull;
@@ -529,6 +556,9 @@ class Grouper {
   Grid grid_;                        // elements by the cells of C_ they overlap (Clear)
   std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes, in order_
   static constexpr size_t kLeaf = 32;        // elements to a leaf of the tree
+  // A Morton code's bits an axis, above an element's id (kMaxElements).
+  static constexpr int kAxisBits = 13, kIdBits = 24;
+  static_assert(kMaxElements <= (1 << kIdBits) && 3 * kAxisBits + kIdBits <= 64, "keys");
   std::vector<int> order_;                   // elements in the tree's order
   std::vector<int> patch_of_;                // ... and their patches
   std::vector<int> slot_of_;                 // each element's place in order_
