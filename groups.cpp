@@ -31,7 +31,7 @@ Cell CellOf(const glm::dvec3& x, double size) {
 struct PatchInfo {
   glm::dvec3 c{0.0}, n{0.0};
   double offset = 0;
-  std::vector<int> corners;     // vertex ids of its elements' corners
+  int32_t corners_at = 0, corners = 0;  // its elements' corners: Grouper::corners_
   glm::dvec3 lo{0.0}, hi{0.0};  // their bounding box
   double near = 0, far = 0;     // the distance is at least near, at most far
   bool candidate = false;
@@ -138,16 +138,23 @@ class Grouper {
       in.n = f.normal;
       in.offset = f.offset;
       in.lo = in.hi = pa.center;
+      in.corners_at = int32_t(corners_.size());
       for (int e : tops) {
         const Element& el = m_.elems[e];
         for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
-          if (std::find(in.corners.begin(), in.corners.end(), el.v[k]) == in.corners.end())
-            in.corners.push_back(el.v[k]);
+          if (std::find(corners_.begin() + in.corners_at, corners_.end(), el.v[k]) ==
+              corners_.end())
+            corners_.push_back(el.v[k]);
           in.lo = glm::min(in.lo, m_.verts[el.v[k]]);
           in.hi = glm::max(in.hi, m_.verts[el.v[k]]);
         }
       }
+      in.corners = int32_t(corners_.size()) - in.corners_at;
     }
+  }
+
+  IdSpan Corners(const PatchInfo& in) const {
+    return {corners_.data() + in.corners_at, corners_.data() + in.corners_at + in.corners};
   }
 
   // Every element's bounding box, and a tree of them; then which patches
@@ -462,7 +469,7 @@ class Grouper {
       front = glm::dot(in.n, m_.verts[el.v[k]]) - in.offset > eps_;
     if (!front) return false;
     const MeshFace& f = m_.faces[m_.patches[el.patch].face];
-    for (int v : in.corners)
+    for (int v : Corners(in))
       if (glm::dot(f.normal, m_.verts[v]) - f.offset > eps_) return true;
     return false;
   }
@@ -473,9 +480,9 @@ class Grouper {
     const PatchInfo& A = info_[a];
     const PatchInfo& B = info_[b];
     if (glm::dot(A.n, B.n) < std::cos(kGroupAngle * M_PI / 180)) return false;
-    for (int v : B.corners)
+    for (int v : Corners(B))
       if (glm::dot(A.n, m_.verts[v]) - A.offset < -tau_) return false;
-    for (int v : A.corners)
+    for (int v : Corners(A))
       if (glm::dot(B.n, m_.verts[v]) - B.offset < -tau_) return false;
     return true;
   }
@@ -553,6 +560,7 @@ class Grouper {
   const Mesh& m_;
   double G_, C_, tau_, lift_, eps_;
   std::vector<PatchInfo> info_;
+  std::vector<int32_t> corners_;     // the patches' corners, patch by patch (PatchInfo)
   Grid grid_;                        // elements by the cells of C_ they overlap (Clear)
   std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes, in order_
   static constexpr size_t kLeaf = 32;        // elements to a leaf of the tree
