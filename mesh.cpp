@@ -26,10 +26,10 @@ glm::dvec3 EdgePoint(const glm::dvec3& p, const glm::dvec3& q, int k, int n) {
 }
 
 double ElementArea(const Mesh& m, const Element& e) {
-  thread_local std::vector<glm::dvec3> p;  // no allocation per element
-  p.clear();
-  for (int k = 0; k < (e.IsTriangle() ? 3 : 4); ++k) p.push_back(m.verts[e.v[k]]);
-  return glm::length(AreaVector(p));
+  const int n = e.IsTriangle() ? 3 : 4;
+  glm::dvec3 p[4];
+  for (int k = 0; k < n; ++k) p[k] = m.verts[size_t(e.v[k])];
+  return glm::length(AreaVector(p, size_t(n)));
 }
 
 namespace {

@@ -571,15 +571,19 @@ bool ParseCamera(const std::string& text, Camera* cam, std::string* err) {
   return true;
 }
 
-glm::dvec3 AreaVector(const std::vector<glm::dvec3>& poly) {
+glm::dvec3 AreaVector(const glm::dvec3* poly, size_t size) {
   // Newell's method, about the centroid to avoid cancellation far from 0.
   glm::dvec3 centroid{0.0};
-  for (const glm::dvec3& v : poly) centroid += v;
-  centroid /= static_cast<double>(poly.size());
+  for (size_t i = 0; i < size; ++i) centroid += poly[i];
+  centroid /= static_cast<double>(size);
   glm::dvec3 n{0.0};
-  for (size_t i = 0; i < poly.size(); ++i)
-    n += glm::cross(poly[i] - centroid, poly[(i + 1) % poly.size()] - centroid);
+  for (size_t i = 0; i < size; ++i)
+    n += glm::cross(poly[i] - centroid, poly[(i + 1) % size] - centroid);
   return 0.5 * n;
+}
+
+glm::dvec3 AreaVector(const std::vector<glm::dvec3>& poly) {
+  return AreaVector(poly.data(), poly.size());
 }
 
 // Not inlined, so that LoadScene and the worker's DecodeScene run the very
