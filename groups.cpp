@@ -203,50 +203,51 @@ class Grouper {
   void BuildTree() {
     const size_t n = m_.elems.size();
     CHECK(n <= size_t{1} << kIdBits);
-    // The boxes by element id first (the mesh read in its own order), in
-    // the tree's order once sorted.
-    std::vector<glm::dvec3> lo_by_id(n), hi_by_id(n);
-    for (size_t e = 0; e < n; ++e) {
+    // An element's bounding box, made where needed (twice, in the mesh's
+    // order) rather than kept by id beside the boxes in the tree's order.
+    auto bound = [&](size_t e, glm::dvec3* lo, glm::dvec3* hi) {
       const Element& el = m_.elems[e];
-      glm::dvec3 lo = m_.verts[size_t(el.v[0])], hi = lo;
+      *lo = *hi = m_.verts[size_t(el.v[0])];
       for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k) {
-        lo = glm::min(lo, m_.verts[size_t(el.v[k])]);
-        hi = glm::max(hi, m_.verts[size_t(el.v[k])]);
+        *lo = glm::min(*lo, m_.verts[size_t(el.v[k])]);
+        *hi = glm::max(*hi, m_.verts[size_t(el.v[k])]);
       }
-      lo_by_id[e] = lo;
-      hi_by_id[e] = hi;
-    }
-    glm::dvec3 lo(0.0), hi(0.0);
-    for (size_t e = 0; e < n; ++e) {
-      lo = e ? glm::min(lo, lo_by_id[e]) : lo_by_id[e];
-      hi = e ? glm::max(hi, hi_by_id[e]) : hi_by_id[e];
+    };
+    // The codes' box: the vertices' (the elements' corners and perhaps a
+    // few more: any box orders them).
+    glm::dvec3 lo(0.0), hi(0.0), a, b;
+    for (size_t v = 0; v < m_.verts.size(); ++v) {
+      lo = v ? glm::min(lo, m_.verts[v]) : m_.verts[v];
+      hi = v ? glm::max(hi, m_.verts[v]) : m_.verts[v];
     }
     const glm::dvec3 scale = double(1 << kAxisBits) / glm::max(hi - lo, glm::dvec3(1e-300));
     std::vector<uint64_t> keyed(n);
     for (size_t e = 0; e < n; ++e) {
-      const glm::dvec3 q = glm::clamp((0.5 * (lo_by_id[e] + hi_by_id[e]) - lo) * scale, 0.0,
-                                      double((1 << kAxisBits) - 1));
+      bound(e, &a, &b);
+      const glm::dvec3 q =
+          glm::clamp((0.5 * (a + b) - lo) * scale, 0.0, double((1 << kAxisBits) - 1));
       keyed[e] = (Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 | Spread(uint64_t(q.z)) << 2)
                      << kIdBits |
                  e;
     }
     RadixSort(&keyed, kIdBits);
     order_.resize(n);
+    slot_of_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      order_[i] = int(keyed[i] & ((uint64_t{1} << kIdBits) - 1));
+      slot_of_[size_t(order_[i])] = int(i);
+    }
+    std::vector<uint64_t>().swap(keyed);
+    // The boxes in the tree's order (a leaf's are read in a row), written
+    // to their places as the mesh is read in its own order.
     elo_.resize(n);
     ehi_.resize(n);
     patch_of_.resize(n);
-    slot_of_.resize(n);
-    for (size_t i = 0; i < n; ++i) {
-      const size_t e = size_t(keyed[i] & ((uint64_t{1} << kIdBits) - 1));
-      order_[i] = int(e);
-      slot_of_[e] = int(i);
-      elo_[i] = lo_by_id[e];
-      ehi_[i] = hi_by_id[e];
+    for (size_t e = 0; e < n; ++e) {
+      const size_t i = size_t(slot_of_[e]);
+      bound(e, &elo_[i], &ehi_[i]);
       patch_of_[i] = m_.elems[e].patch;
     }
-    std::vector<uint64_t>().swap(keyed);
-    std::vector<glm::dvec3>().swap(lo_by_id);
-    std::vector<glm::dvec3>().swap(hi_by_id);
     levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
     for (size_t i = 0; i < n; ++i) {
       const PatchInfo& in = info_[size_t(patch_of_[i])];
