@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "check.h"
+#include "radix_sort.h"
 
 namespace {
 
@@ -230,7 +231,7 @@ class Grouper {
                      << kIdBits |
                  e;
     }
-    RadixSort(&keyed, kIdBits);
+    RadixSort(&keyed, [](uint64_t k) { return k; }, kIdBits);
     order_.resize(n);
     slot_of_.resize(n);
     for (size_t i = 0; i < n; ++i) {
@@ -258,20 +259,6 @@ class Grouper {
       std::vector<Box> up((below.size() + 1) / 2);
       for (size_t i = 0; i < below.size(); ++i) Extend(&up[i / 2], below[i], i % 2 == 0);
       levels_.push_back(std::move(up));
-    }
-  }
-
-  // Sorts *keys by their bits from `from` up, stably (least significant
-  // byte first; a byte all keys share is skipped).
-  static void RadixSort(std::vector<uint64_t>* keys, int from) {
-    std::vector<uint64_t> tmp(keys->size());
-    for (int shift = from; shift < 64; shift += 8) {
-      std::array<size_t, 257> at{};
-      for (uint64_t k : *keys) ++at[((k >> shift) & 0xff) + 1];
-      if (std::find(at.begin(), at.end(), keys->size()) != at.end()) continue;
-      for (size_t b = 0; b < 256; ++b) at[b + 1] += at[b];
-      for (uint64_t k : *keys) tmp[at[(k >> shift) & 0xff]++] = k;
-      keys->swap(tmp);
     }
   }
 

@@ -10,6 +10,7 @@
 #include "hash.h"
 #include "mesh.h"
 #include "point_ids.h"
+#include "radix_sort.h"
 
 namespace {
 
@@ -133,7 +134,7 @@ class Joiner {
     // An edge of more than two faces has something standing on it (a wall
     // on the line where a floor was cut): no join across it, or elements
     // would reach from one side of the wall to the other.
-    std::sort(used.begin(), used.end());
+    RadixSort(&used, [](uint64_t k) { return k; });
     std::vector<uint64_t> crowded;  // sorted: those of more than two faces (few)
     for (size_t i = 0; i + 2 < used.size(); ++i)
       if (used[i] == used[i + 2] && (crowded.empty() || crowded.back() != used[i]))
@@ -147,7 +148,8 @@ class Joiner {
                                                               a < b ? e.first : EdgeKey(b, a));
                                   }),
                    edges_.end());
-    std::sort(edges_.begin(), edges_.end());
+    // By edge, then by face: they came in face order.
+    RadixSort(&edges_, [](const std::pair<uint64_t, int>& e) { return e.first; });
     // Where each vertex's edges begin (edges_ is sorted by the first
     // vertex), and each edge's reverse: FaceWith in a few steps, and
     // each pass without a search.
