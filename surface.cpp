@@ -91,6 +91,7 @@ class Joiner {
 
  private:
   void Weld() {
+    constexpr size_t kAhead = 4;
     const size_t n = scene_.faces.size();
     PointIds ids(&verts_);
     std::vector<uint64_t> used;  // every face's edges, undirected
@@ -105,6 +106,10 @@ class Joiner {
     hi_.resize(n);
     for (size_t f = 0; f < n; ++f) {
       const Face& face = scene_.faces[f];
+      // The corners of a face a few ahead on their way while this one's
+      // are welded.
+      if (f + kAhead < n)
+        for (const glm::dvec3& v : scene_.faces[f + kAhead].verts) ids.Prefetch(v);
       loop_at_[f] = int(loops_.size());
       glm::dvec3 lo = face.verts[0], hi = lo;
       for (const glm::dvec3& v : face.verts) {
