@@ -5,6 +5,9 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "check.h"
+#include "radix_sort.h"
+
 namespace {
 
 struct Cell {
@@ -29,7 +32,7 @@ Cell CellOf(const glm::dvec3& x, double size) {
 struct PatchInfo {
   glm::dvec3 c{0.0}, n{0.0};
   double offset = 0;
-  std::vector<int> corners;     // vertex ids of its elements' corners
+  int32_t corners_at = 0, corners = 0;  // its elements' corners: Grouper::corners_
   glm::dvec3 lo{0.0}, hi{0.0};  // their bounding box
   double near = 0, far = 0;     // the distance is at least near, at most far
   bool candidate = false;
@@ -136,16 +139,23 @@ class Grouper {
       in.n = f.normal;
       in.offset = f.offset;
       in.lo = in.hi = pa.center;
+      in.corners_at = int32_t(corners_.size());
       for (int e : tops) {
         const Element& el = m_.elems[e];
         for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
-          if (std::find(in.corners.begin(), in.corners.end(), el.v[k]) == in.corners.end())
-            in.corners.push_back(el.v[k]);
+          if (std::find(corners_.begin() + in.corners_at, corners_.end(), el.v[k]) ==
+              corners_.end())
+            corners_.push_back(el.v[k]);
           in.lo = glm::min(in.lo, m_.verts[el.v[k]]);
           in.hi = glm::max(in.hi, m_.verts[el.v[k]]);
         }
       }
+      in.corners = int32_t(corners_.size()) - in.corners_at;
     }
+  }
+
+  IdSpan Corners(const PatchInfo& in) const {
+    return {corners_.data() + in.corners_at, corners_.data() + in.corners_at + in.corners};
   }
 
   // Every element's bounding box, and a tree of them; then which patches
@@ -187,11 +197,15 @@ class Grouper {
 
   // A bounding-volume tree of the elements' boxes: the elements in the
   // Morton order of their boxes' centres, kLeaf to a leaf, each level
-  // above the union of two boxes of the one below, up to one root.
+  // above the union of two boxes of the one below, up to one root. The
+  // order is only the search's speed: every search is exact whatever the
+  // tree (Nearest), so the codes are coarse enough to hold the element's
+  // id below them, and sorted by radix (stable: ties stay in id order).
   void BuildTree() {
     const size_t n = m_.elems.size();
-    // An element's bounding box, made again where needed rather than
-    // kept by id beside the boxes in the tree's order.
+    CHECK(n <= size_t{1} << kIdBits);
+    // An element's bounding box, made where needed (twice, in the mesh's
+    // order) rather than kept by id beside the boxes in the tree's order.
     auto bound = [&](size_t e, glm::dvec3* lo, glm::dvec3* hi) {
       const Element& el = m_.elems[e];
       *lo = *hi = m_.verts[size_t(el.v[0])];
@@ -200,34 +214,41 @@ class Grouper {
         *hi = glm::max(*hi, m_.verts[size_t(el.v[k])]);
       }
     };
+    // The codes' box: the vertices' (the elements' corners and perhaps a
+    // few more: any box orders them).
     glm::dvec3 lo(0.0), hi(0.0), a, b;
+    for (size_t v = 0; v < m_.verts.size(); ++v) {
+      lo = v ? glm::min(lo, m_.verts[v]) : m_.verts[v];
+      hi = v ? glm::max(hi, m_.verts[v]) : m_.verts[v];
+    }
+    const glm::dvec3 scale = double(1 << kAxisBits) / glm::max(hi - lo, glm::dvec3(1e-300));
+    std::vector<uint64_t> keyed(n);
     for (size_t e = 0; e < n; ++e) {
       bound(e, &a, &b);
-      lo = e ? glm::min(lo, a) : a;
-      hi = e ? glm::max(hi, b) : b;
+      const glm::dvec3 q =
+          glm::clamp((0.5 * (a + b) - lo) * scale, 0.0, double((1 << kAxisBits) - 1));
+      keyed[e] = (Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 | Spread(uint64_t(q.z)) << 2)
+                     << kIdBits |
+                 e;
     }
-    const glm::dvec3 scale = double(1 << 21) / glm::max(hi - lo, glm::dvec3(1e-300));
-    std::vector<std::pair<uint64_t, int>> keyed(n);
-    for (size_t e = 0; e < n; ++e) {
-      bound(e, &a, &b);
-      const glm::dvec3 q = glm::clamp((0.5 * (a + b) - lo) * scale, 0.0, double((1 << 21) - 1));
-      keyed[e] = {Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 | Spread(uint64_t(q.z)) << 2,
-                  int(e)};
-    }
-    std::sort(keyed.begin(), keyed.end());
-    // The boxes in the tree's order: a leaf's are read in a row.
+    RadixSort(&keyed, [](uint64_t k) { return k; }, kIdBits);
     order_.resize(n);
+    slot_of_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      order_[i] = int(keyed[i] & ((uint64_t{1} << kIdBits) - 1));
+      slot_of_[size_t(order_[i])] = int(i);
+    }
+    std::vector<uint64_t>().swap(keyed);
+    // The boxes in the tree's order (a leaf's are read in a row), written
+    // to their places as the mesh is read in its own order.
     elo_.resize(n);
     ehi_.resize(n);
     patch_of_.resize(n);
-    slot_of_.resize(n);
-    for (size_t i = 0; i < n; ++i) {
-      order_[i] = keyed[i].second;
-      slot_of_[size_t(order_[i])] = int(i);
-      bound(size_t(order_[i]), &elo_[i], &ehi_[i]);
-      patch_of_[i] = m_.elems[size_t(order_[i])].patch;
+    for (size_t e = 0; e < n; ++e) {
+      const size_t i = size_t(slot_of_[e]);
+      bound(e, &elo_[i], &ehi_[i]);
+      patch_of_[i] = m_.elems[e].patch;
     }
-    std::vector<std::pair<uint64_t, int>>().swap(keyed);
     levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
     for (size_t i = 0; i < n; ++i) {
       const PatchInfo& in = info_[size_t(patch_of_[i])];
@@ -267,7 +288,8 @@ class Grouper {
     return m.x + m.y + m.z - b.off > eps_;
   }
 
-  // The bits of x (21) spread to every third bit: one axis of a Morton code.
+  // The bits of x (kAxisBits, at most 21) spread to every third bit: one
+  // axis of a Morton code.
   static uint64_t Spread(uint64_t x) {
     x &= 0x1fffff;
     x = (x | x << 32) & 0x1f00000000ffffull;
@@ -435,7 +457,7 @@ class Grouper {
       front = glm::dot(in.n, m_.verts[el.v[k]]) - in.offset > eps_;
     if (!front) return false;
     const MeshFace& f = m_.faces[m_.patches[el.patch].face];
-    for (int v : in.corners)
+    for (int v : Corners(in))
       if (glm::dot(f.normal, m_.verts[v]) - f.offset > eps_) return true;
     return false;
   }
@@ -446,9 +468,9 @@ class Grouper {
     const PatchInfo& A = info_[a];
     const PatchInfo& B = info_[b];
     if (glm::dot(A.n, B.n) < std::cos(kGroupAngle * M_PI / 180)) return false;
-    for (int v : B.corners)
+    for (int v : Corners(B))
       if (glm::dot(A.n, m_.verts[v]) - A.offset < -tau_) return false;
-    for (int v : A.corners)
+    for (int v : Corners(A))
       if (glm::dot(B.n, m_.verts[v]) - B.offset < -tau_) return false;
     return true;
   }
@@ -526,9 +548,13 @@ class Grouper {
   const Mesh& m_;
   double G_, C_, tau_, lift_, eps_;
   std::vector<PatchInfo> info_;
+  std::vector<int32_t> corners_;     // the patches' corners, patch by patch (PatchInfo)
   Grid grid_;                        // elements by the cells of C_ they overlap (Clear)
   std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes, in order_
   static constexpr size_t kLeaf = 32;        // elements to a leaf of the tree
+  // A Morton code's bits an axis, above an element's id (kMaxElements).
+  static constexpr int kAxisBits = 13, kIdBits = 24;
+  static_assert(kMaxElements <= (1 << kIdBits) && 3 * kAxisBits + kIdBits <= 64, "keys");
   std::vector<int> order_;                   // elements in the tree's order
   std::vector<int> patch_of_;                // ... and their patches
   std::vector<int> slot_of_;                 // each element's place in order_

@@ -26,10 +26,10 @@ glm::dvec3 EdgePoint(const glm::dvec3& p, const glm::dvec3& q, int k, int n) {
 }
 
 double ElementArea(const Mesh& m, const Element& e) {
-  thread_local std::vector<glm::dvec3> p;  // no allocation per element
-  p.clear();
-  for (int k = 0; k < (e.IsTriangle() ? 3 : 4); ++k) p.push_back(m.verts[e.v[k]]);
-  return glm::length(AreaVector(p));
+  const int n = e.IsTriangle() ? 3 : 4;
+  glm::dvec3 p[4];
+  for (int k = 0; k < n; ++k) p[k] = m.verts[size_t(e.v[k])];
+  return glm::length(AreaVector(p, size_t(n)));
 }
 
 namespace {
@@ -78,56 +78,80 @@ std::vector<std::array<int, 3>> Triangulate(const std::vector<glm::dvec3>& poly,
   return tris;
 }
 
+// Cuts the surfaces one after another into patches and elements; its
+// buffers are kept from face to face (10^6 faces, each a few patches).
 struct Builder {
+  Builder(Mesh* mesh, int elements_per_patch, PointIds* ids)
+      : m(mesh), epp(elements_per_patch), fv(ids) {}
   Mesh* m;
-  int face;
   int epp;  // elements per patch edge
   PointIds* fv;  // the face's vertices, welded by value so that pieces share edges
-  std::unordered_map<long long, int> patch_of;  // coarse cell -> patch id
-  // The face's patches' top elements as they come (a face's elements
+  int face = -1;
+  // Per patch cell of the piece being cut (Quad, Tri: its index of the
+  // cell), the patch made for it, or -1.
+  std::vector<int> patch_of;
+  // The face's elements by patch as they come (a face's elements
   // interleave its patches), until Finish() lays them out in patch order.
-  std::vector<std::vector<int32_t>> tops;
+  std::vector<std::pair<int32_t, int32_t>> tops;
+  std::vector<int32_t> count;  // per patch of the face: its top elements (Finish)
+  std::vector<int> id;         // the piece's grid points (Quad, Tri)
   int first_patch = -1;
 
-  int PatchFor(long long key) {
-    auto it = patch_of.find(key);
-    if (it != patch_of.end()) return it->second;
-    int id = int(m->patches.size());
+  void Start(int f) {
+    face = f;
+    first_patch = -1;
+    tops.clear();
+  }
+
+  void Cells(size_t n) { patch_of.assign(n, -1); }
+
+  int PatchFor(size_t cell) {
+    int& id = patch_of[cell];
+    if (id >= 0) return id;
+    id = int(m->patches.size());
     if (first_patch < 0) first_patch = m->faces[face].patch_at = id;
     ++m->faces[face].built;
-    tops.emplace_back();
     m->patches.emplace_back();
     m->patches.back().face = face;
-    patch_of.emplace(key, id);
     return id;
   }
 
-  void AddElement(const std::array<int, 4>& v, long long patch_key) {
+  void AddElement(const std::array<int, 4>& v, size_t cell) {
     Element e;
     e.v = v;
     e.area = ElementArea(*m, e);
     if (!(e.area > 0)) return;  // a sliver of rounding; it receives nothing
-    int patch = PatchFor(patch_key);
+    int patch = PatchFor(cell);
     e.patch = patch;
-    tops[size_t(patch - first_patch)].push_back(int32_t(m->elems.size()));
+    tops.push_back({patch - first_patch, int32_t(m->elems.size())});
     m->elems.push_back(e);
   }
 
+  // The face's top elements into Mesh::patch_tops patch by patch, each
+  // patch's in the order they came (a counting sort).
   void Finish() {
-    for (size_t i = 0; i < tops.size(); ++i) {
+    if (first_patch < 0) return;
+    const size_t patches = m->patches.size() - size_t(first_patch);
+    count.assign(patches + 1, 0);
+    for (const auto& t : tops) ++count[size_t(t.first) + 1];
+    const int32_t at = int32_t(m->patch_tops.size());
+    for (size_t i = 0; i < patches; ++i) {
       Patch& p = m->patches[size_t(first_patch) + i];
-      p.tops_at = int32_t(m->patch_tops.size());
-      p.tops = int32_t(tops[i].size());
-      m->patch_tops.insert(m->patch_tops.end(), tops[i].begin(), tops[i].end());
+      p.tops = count[i + 1];
+      count[i + 1] += count[i];
+      p.tops_at = at + count[i];
     }
+    m->patch_tops.resize(m->patch_tops.size() + tops.size());
+    for (const auto& t : tops) m->patch_tops[size_t(at + count[size_t(t.first)]++)] = t.second;
   }
 
   // Quad a,b,c,d (convex, planar) cut into nu x nv patches of epp x epp
   // elements by bilinear interpolation; cells stay planar and convex.
   void Quad(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
-            const glm::dvec3& d, int nu, int nv, long long piece) {
+            const glm::dvec3& d, int nu, int nv) {
     int NU = nu * epp, NV = nv * epp;
-    std::vector<int> id((NU + 1) * (NV + 1));
+    id.resize(size_t(NU + 1) * size_t(NV + 1));
+    Cells(size_t(nu) * size_t(nv));
     for (int j = 0; j <= NV; ++j)
       for (int i = 0; i <= NU; ++i) {
         glm::dvec3 p;
@@ -143,17 +167,15 @@ struct Builder {
       }
     for (int j = 0; j < NV; ++j)
       for (int i = 0; i < NU; ++i) {
-        long long key = (piece << 40) | (long long)(j / epp) << 20 | (i / epp);
         AddElement({id[j * (NU + 1) + i], id[j * (NU + 1) + i + 1],
                     id[(j + 1) * (NU + 1) + i + 1], id[(j + 1) * (NU + 1) + i]},
-                   key);
+                   size_t(j / epp) * size_t(nu) + size_t(i / epp));
       }
   }
 
   // Triangle a,b,c cut into n*n patches (the usual 4-way grid), each of
   // epp*epp elements.
-  void Tri(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, int n,
-           long long piece) {
+  void Tri(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, int n) {
     int N = n * epp;
     auto at = [&](int i, int j) -> int {  // point a + (b-a) i/N + (c-a) j/N
       glm::dvec3 p;
@@ -163,14 +185,15 @@ struct Builder {
       else p = a + (b - a) * (double(i) / N) + (c - a) * (double(j) / N);
       return fv->Id(p);
     };
-    std::vector<int> id((N + 1) * (N + 1), -1);
+    id.assign(size_t(N + 1) * size_t(N + 1), -1);
+    Cells(2 * size_t(n) * size_t(n));
     for (int j = 0; j <= N; ++j)
       for (int i = 0; i + j <= N; ++i) id[j * (N + 1) + i] = at(i, j);
     auto V = [&](int i, int j) { return id[j * (N + 1) + i]; };
     for (int j = 0; j < N; ++j)
       for (int i = 0; i + j < N; ++i) {
         int I = i / epp, J = j / epp, s = i % epp + j % epp;
-        long long up = (piece << 40) | (long long)J << 20 | I << 1;
+        const size_t up = 2 * (size_t(J) * size_t(n) + size_t(I));
         AddElement({V(i, j), V(i + 1, j), V(i, j + 1), -1}, s < epp ? up : up | 1);
         if (i + j + 1 < N)
           AddElement({V(i + 1, j), V(i + 1, j + 1), V(i, j + 1), -1},
@@ -268,6 +291,7 @@ bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const M
   if (read) read();
   for (const Material& mat : scene.materials) mesh->materials.push_back({mat.kd, mat.ke});
   PointIds fv(&mesh->verts);
+  Builder b(mesh, epp, &fv);
   for (const Surface& f : surfaces) {
     MeshFace mf;
     mf.scene_at = int32_t(mesh->face_scene.size());
@@ -282,16 +306,16 @@ bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const M
 
     mesh->faces[face].vbegin = int(mesh->verts.size());
     fv.Clear();
-    Builder b{mesh, face, epp, &fv, {}, {}, -1};
+    b.Start(face);
     const auto& v = f.poly;
     if (v.size() == 3) {
       double e = std::max({glm::length(v[1] - v[0]), glm::length(v[2] - v[1]),
                            glm::length(v[0] - v[2])});
-      b.Tri(v[0], v[1], v[2], Cuts(e, ps), 0);
+      b.Tri(v[0], v[1], v[2], Cuts(e, ps));
     } else if (v.size() == 4 && Convex(v, f.normal)) {
       int nu = Cuts(std::max(glm::length(v[1] - v[0]), glm::length(v[2] - v[3])), ps);
       int nv = Cuts(std::max(glm::length(v[3] - v[0]), glm::length(v[2] - v[1])), ps);
-      b.Quad(v[0], v[1], v[2], v[3], nu, nv, 0);
+      b.Quad(v[0], v[1], v[2], v[3], nu, nv);
     } else {
       // One cut count for all pieces keeps their shared edges conforming.
       auto tris = Triangulate(v, f.normal);
@@ -299,8 +323,8 @@ bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const M
       for (const auto& t : tris)
         for (int k = 0; k < 3; ++k)
           n = std::max(n, Cuts(glm::length(v[t[(k + 1) % 3]] - v[t[k]]), ps));
-      for (size_t t = 0; t < tris.size(); ++t)
-        b.Tri(v[tris[t][0]], v[tris[t][1]], v[tris[t][2]], n, (long long)t);
+      // Each piece's patches are its own: cells are per Tri call.
+      for (size_t t = 0; t < tris.size(); ++t) b.Tri(v[tris[t][0]], v[tris[t][1]], v[tris[t][2]], n);
     }
     b.Finish();
     mesh->faces[face].vend = int(mesh->verts.size());

@@ -18,10 +18,23 @@ class PointIds {
  public:
   // Ids index *points; new points are appended to it.
   explicit PointIds(std::vector<glm::dvec3>* points) : points_(points) {}
+  // Room for `points` points without growing on the way.
+  void Reserve(size_t points) {
+    if (2 * points > table_.size()) {
+      size_t size = 64;
+      while (size < 2 * points) size *= 2;
+      Rehash(size);
+    }
+  }
   // Forgets the points welded so far (they stay in *points).
   void Clear() {
     for (size_t i : used_) table_[i] = -1;
     used_.clear();
+  }
+  // Starts loading p's slot of the table, for an Id(p) a little later: a
+  // table of millions of points misses the cache at every look-up.
+  void Prefetch(const glm::dvec3& p) const {
+    if (!table_.empty()) __builtin_prefetch(&table_[PointHash()(p) & (table_.size() - 1)]);
   }
   int Id(const glm::dvec3& p) {
     if (2 * (used_.size() + 1) > table_.size()) Grow();
@@ -36,11 +49,13 @@ class PointIds {
   }
 
  private:
-  void Grow() {
+  void Grow() { Rehash(std::max<size_t>(64, 2 * table_.size())); }
+
+  void Rehash(size_t size) {
     std::vector<int> ids;
     ids.reserve(used_.size());
     for (size_t i : used_) ids.push_back(table_[i]);
-    table_.assign(std::max<size_t>(64, 2 * table_.size()), -1);
+    table_.assign(size, -1);
     used_.clear();
     const size_t mask = table_.size() - 1;
     for (int id : ids) {

@@ -195,8 +195,23 @@ class LineReader {
 // "" if the line is text, else what is wrong. Tabs are whitespace; a CR
 // is only legal as part of a CRLF ending, which LineReader removed.
 std::string CheckText(const std::string& line) {
-  bool any = false;  // the common case first, branch-free (it vectorises)
-  for (unsigned char c : line) any |= ((c < 0x20) & (c != '\t')) | (c == 0x7f);
+  // The common case first, eight bytes at a time (a scalar loop a byte at
+  // a time was a fifth of parsing at 10^6 faces): is any byte below 0x20
+  // (a tab too, so a line with a tab takes the exact loop below) or 0x7f?
+  // Bit tricks for "a byte below n" and "a zero byte", exact for the word.
+  constexpr uint64_t kOnes = 0x0101010101010101ull, kHigh = 0x8080808080808080ull;
+  bool any = false;
+  size_t i = 0;
+  for (; i + 8 <= line.size(); i += 8) {
+    uint64_t x;
+    std::memcpy(&x, line.data() + i, 8);
+    const uint64_t del = x ^ (0x7f * kOnes);
+    any |= ((((x - 0x20 * kOnes) & ~x) | ((del - kOnes) & ~del)) & kHigh) != 0;
+  }
+  for (; i < line.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(line[i]);
+    any |= ((c < 0x20) & (c != '\t')) | (c == 0x7f);
+  }
   if (!any) return "";
   for (unsigned char c : line) {
     if ((c < 0x20 && c != '\t') || c == 0x7f) {
@@ -571,15 +586,19 @@ bool ParseCamera(const std::string& text, Camera* cam, std::string* err) {
   return true;
 }
 
-glm::dvec3 AreaVector(const std::vector<glm::dvec3>& poly) {
+glm::dvec3 AreaVector(const glm::dvec3* poly, size_t size) {
   // Newell's method, about the centroid to avoid cancellation far from 0.
   glm::dvec3 centroid{0.0};
-  for (const glm::dvec3& v : poly) centroid += v;
-  centroid /= static_cast<double>(poly.size());
+  for (size_t i = 0; i < size; ++i) centroid += poly[i];
+  centroid /= static_cast<double>(size);
   glm::dvec3 n{0.0};
-  for (size_t i = 0; i < poly.size(); ++i)
-    n += glm::cross(poly[i] - centroid, poly[(i + 1) % poly.size()] - centroid);
+  for (size_t i = 0; i < size; ++i)
+    n += glm::cross(poly[i] - centroid, poly[(i + 1) % size] - centroid);
   return 0.5 * n;
+}
+
+glm::dvec3 AreaVector(const std::vector<glm::dvec3>& poly) {
+  return AreaVector(poly.data(), poly.size());
 }
 
 // Not inlined, so that LoadScene and the worker's DecodeScene run the very

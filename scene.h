@@ -74,6 +74,8 @@ void DropVertices(Scene* scene);
 
 // A polygon's normal scaled to its area (Newell's method).
 glm::dvec3 AreaVector(const std::vector<glm::dvec3>& poly);
+// The same of poly[0, size): an element's corners, without a vector.
+glm::dvec3 AreaVector(const glm::dvec3* poly, size_t size);
 // Sets face->area and face->normal from face->verts (AreaVector, its
 // length, the vector over its length), as LoadScene does for every face.
 // The scene frame leaves both out: the worker computes them with this

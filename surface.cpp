@@ -10,6 +10,7 @@
 #include "hash.h"
 #include "mesh.h"
 #include "point_ids.h"
+#include "radix_sort.h"
 
 namespace {
 
@@ -59,6 +60,18 @@ class Joiner {
     std::vector<int> begin(n + 1, 0), members(n);
     for (size_t f = 0; f < n; ++f) ++begin[size_t(Find(int(f))) + 1];
     for (size_t r = 0; r < n; ++r) begin[r + 1] += begin[r];
+    // A piece for each face of a group of more than one, numbered in face
+    // order (so pieces compare as their first faces did); a face alone
+    // never joins and becomes its surface as read.
+    piece_at_.assign(n, -1);
+    for (size_t f = 0; f < n; ++f) {
+      const size_t r = size_t(Find(int(f)));
+      if (begin[r + 1] - begin[r] > 1) {
+        piece_at_[f] = int(pieces_.size());
+        pieces_.push_back(FacePiece(int(f)));
+      }
+    }
+    piece_of_ = piece_at_;
     std::vector<int> fill(begin.begin(), begin.end() - 1);
     for (size_t f = 0; f < n; ++f) members[size_t(fill[size_t(Find(int(f)))]++)] = int(f);
     for (size_t r = 0; r < n; ++r)
@@ -66,45 +79,53 @@ class Joiner {
         Whole(std::vector<int>(members.begin() + begin[r], members.begin() + begin[r + 1]));
     while (Pass()) {}
     std::vector<Surface> out;
-    for (size_t i = 0; i < pieces_.size(); ++i)
-      if (pieces_[i].alive) out.push_back(Finish(int(i)));
+    for (size_t f = 0; f < n; ++f) {
+      const int i = piece_at_[f];
+      if (i < 0)
+        out.push_back(Alone(int(f)));
+      else if (pieces_[size_t(i)].alive)
+        out.push_back(Finish(i));
+    }
     return out;
   }
 
  private:
   void Weld() {
+    constexpr size_t kAhead = 4;
     const size_t n = scene_.faces.size();
     PointIds ids(&verts_);
     std::vector<uint64_t> used;  // every face's edges, undirected
     size_t corners = 0;
     for (const Face& face : scene_.faces) corners += face.verts.size();
+    ids.Reserve(corners);
     used.reserve(corners);
     edges_.reserve(corners);
-    pieces_.resize(n);
-    piece_of_.resize(n);
+    loop_at_.resize(n + 1);
+    loops_.reserve(corners);
+    lo_.resize(n);
+    hi_.resize(n);
     for (size_t f = 0; f < n; ++f) {
       const Face& face = scene_.faces[f];
-      Piece& p = pieces_[f];
-      p.faces = {int(f)};
-      p.loop.reserve(face.verts.size());
-      p.area_vec = face.normal * face.area;
-      p.area = face.area;
-      glm::dvec3 c(0.0);
-      p.lo = p.hi = face.verts[0];
+      // The corners of a face a few ahead on their way while this one's
+      // are welded.
+      if (f + kAhead < n)
+        for (const glm::dvec3& v : scene_.faces[f + kAhead].verts) ids.Prefetch(v);
+      loop_at_[f] = int(loops_.size());
+      glm::dvec3 lo = face.verts[0], hi = lo;
       for (const glm::dvec3& v : face.verts) {
-        p.loop.push_back(ids.Id(v));
-        c += v;
-        p.lo = glm::min(p.lo, v);
-        p.hi = glm::max(p.hi, v);
+        loops_.push_back(ids.Id(v));
+        lo = glm::min(lo, v);
+        hi = glm::max(hi, v);
       }
-      p.moment = face.area * (c / double(face.verts.size()));
-      piece_of_[f] = int(f);
-      for (size_t k = 0, m = p.loop.size(); k < m; ++k) {
-        const int a = p.loop[k], b = p.loop[(k + 1) % m];
+      lo_[f] = lo;
+      hi_[f] = hi;
+      const int* loop = loops_.data() + loop_at_[f];
+      for (size_t k = 0, m = face.verts.size(); k < m; ++k) {
+        const int a = loop[k], b = loop[(k + 1) % m];
         used.push_back(a < b ? EdgeKey(a, b) : EdgeKey(b, a));
       }
       // Only convex faces join: the pieces must stay convex.
-      const double tol = Tolerance(p.lo, p.hi);
+      const double tol = Tolerance(lo, hi);
       bool convex = true;
       const size_t m = face.verts.size();
       for (size_t k = 0; k < m && convex; ++k)
@@ -112,12 +133,13 @@ class Joiner {
                               face.normal, tol);
       if (!convex) continue;
       for (size_t k = 0; k < m; ++k)
-        edges_.push_back({EdgeKey(p.loop[k], p.loop[(k + 1) % m]), int(f)});
+        edges_.push_back({EdgeKey(loop[k], loop[(k + 1) % m]), int(f)});
     }
+    loop_at_[n] = int(loops_.size());
     // An edge of more than two faces has something standing on it (a wall
     // on the line where a floor was cut): no join across it, or elements
     // would reach from one side of the wall to the other.
-    std::sort(used.begin(), used.end());
+    RadixSort(&used, [](uint64_t k) { return k; });
     std::vector<uint64_t> crowded;  // sorted: those of more than two faces (few)
     for (size_t i = 0; i + 2 < used.size(); ++i)
       if (used[i] == used[i + 2] && (crowded.empty() || crowded.back() != used[i]))
@@ -131,7 +153,8 @@ class Joiner {
                                                               a < b ? e.first : EdgeKey(b, a));
                                   }),
                    edges_.end());
-    std::sort(edges_.begin(), edges_.end());
+    // By edge, then by face: they came in face order.
+    RadixSort(&edges_, [](const std::pair<uint64_t, int>& e) { return e.first; });
     // Where each vertex's edges begin (edges_ is sorted by the first
     // vertex), and each edge's reverse: FaceWith in a few steps, and
     // each pass without a search.
@@ -148,8 +171,8 @@ class Joiner {
   bool Coplanar(int f, int g) const {
     const Face &a = scene_.faces[f], &b = scene_.faces[g];
     if (!(glm::dot(a.normal, b.normal) > 0)) return false;
-    const double tol = Tolerance(glm::min(pieces_[f].lo, pieces_[g].lo),
-                                 glm::max(pieces_[f].hi, pieces_[g].hi));
+    const double tol = Tolerance(glm::min(lo_[size_t(f)], lo_[size_t(g)]),
+                                 glm::max(hi_[size_t(f)], hi_[size_t(g)]));
     for (const glm::dvec3& v : b.verts)
       if (std::abs(glm::dot(v - a.verts[0], a.normal)) > tol) return false;
     for (const glm::dvec3& v : a.verts)
@@ -180,12 +203,12 @@ class Joiner {
   // its plane, becomes one piece at once (a wall cut into triangles, a fan
   // of an n-gon): the pairwise joins below could stop short of it.
   void Whole(const std::vector<int>& members) {
-    const int root = members[0];
+    const int root = members[0];  // a face; its piece, piece_at_[root], takes the whole
     std::unordered_map<int, int> next;  // the outline's directed edges
     size_t edges = 0;
     int start = -1;
     for (int f : members) {
-      const std::vector<int>& l = pieces_[f].loop;
+      const std::vector<int>& l = pieces_[size_t(piece_at_[size_t(f)])].loop;
       for (size_t k = 0; k < l.size(); ++k) {
         const int a = l[k], b = l[(k + 1) % l.size()];
         const int g = FaceWith(b, a);
@@ -203,10 +226,10 @@ class Joiner {
     }
     if (loop.size() != edges) return;  // more than one loop: holes
     Piece whole;
-    whole.lo = pieces_[root].lo;
-    whole.hi = pieces_[root].hi;
+    whole.lo = lo_[size_t(root)];
+    whole.hi = hi_[size_t(root)];
     for (int f : members) {
-      const Piece& p = pieces_[f];
+      const Piece& p = pieces_[size_t(piece_at_[size_t(f)])];
       whole.area_vec += p.area_vec;
       whole.moment += p.moment;
       whole.area += p.area;
@@ -226,10 +249,10 @@ class Joiner {
     whole.loop = std::move(loop);
     whole.faces = members;
     for (int f : members) {
-      pieces_[f].alive = false;
-      piece_of_[f] = root;
+      pieces_[size_t(piece_at_[size_t(f)])].alive = false;
+      piece_of_[size_t(f)] = piece_at_[size_t(root)];
     }
-    pieces_[root] = std::move(whole);
+    pieces_[size_t(piece_at_[size_t(root)])] = std::move(whole);
   }
 
   // The face with directed edge a -> b, or -1 (the first, where faces
@@ -352,20 +375,44 @@ class Joiner {
     return true;
   }
 
+  // Face f's piece as it is before any join.
+  Piece FacePiece(int f) const {
+    const Face& face = scene_.faces[size_t(f)];
+    Piece p;
+    p.faces = {f};
+    p.loop.assign(loops_.begin() + loop_at_[size_t(f)], loops_.begin() + loop_at_[size_t(f) + 1]);
+    p.area_vec = face.normal * face.area;
+    p.area = face.area;
+    glm::dvec3 c(0.0);
+    for (const glm::dvec3& v : face.verts) c += v;
+    p.moment = face.area * (c / double(face.verts.size()));
+    p.lo = lo_[size_t(f)];
+    p.hi = hi_[size_t(f)];
+    return p;
+  }
+
+  // The surface of face f alone, as read: the mesh of an unjoined face
+  // does not change.
+  Surface Alone(int f) const {
+    const Face& face = scene_.faces[size_t(f)];
+    Surface s;
+    s.faces = {f};
+    s.material = face.material;
+    s.poly = face.verts;
+    s.normal = face.normal;
+    s.offset = glm::dot(face.normal, face.verts[0]);
+    s.area = face.area;
+    return s;
+  }
+
   Surface Finish(int i) {
-    const Piece& p = pieces_[i];
+    const Piece& p = pieces_[size_t(i)];
+    if (p.faces.size() == 1) return Alone(p.faces[0]);
     Surface s;
     s.faces = p.faces;
     std::sort(s.faces.begin(), s.faces.end());
     const Face& first = scene_.faces[s.faces[0]];
     s.material = first.material;
-    if (s.faces.size() == 1) {  // as read: the mesh of an unjoined face does not change
-      s.poly = first.verts;
-      s.normal = first.normal;
-      s.offset = glm::dot(first.normal, first.verts[0]);
-      s.area = first.area;
-      return s;
-    }
     s.normal = glm::normalize(p.area_vec);
     s.offset = glm::dot(s.normal, p.moment / p.area);
     for (int f : s.faces) s.area += scene_.faces[f].area;
@@ -395,8 +442,12 @@ class Joiner {
 
   const Scene& scene_;
   std::vector<glm::dvec3> verts_;
-  std::vector<Piece> pieces_;
-  std::vector<int> piece_of_;   // face -> the piece it is in
+  std::vector<int> loops_;          // each face's corners, welded, face by face
+  std::vector<int> loop_at_;        // per face: where its corners begin in loops_; one more
+  std::vector<glm::dvec3> lo_, hi_; // per face: its bounding box
+  std::vector<Piece> pieces_;       // for the faces of groups of more than one (piece_at_)
+  std::vector<int> piece_at_;       // face -> the piece made of it, or -1: it joins nothing
+  std::vector<int> piece_of_;       // face -> the piece it is in (faces with a piece)
   std::vector<int> group_;      // union-find parent of each face (Group)
   std::vector<std::pair<uint64_t, int>> edges_;  // directed edge -> face, sorted
   std::vector<int> from_;  // per vertex: its first edge in edges_; one more at the end

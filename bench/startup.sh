@@ -14,14 +14,22 @@
 #   JOBS="2 4 8" BEFORE=/tmp/before2/radiosity bash bench/startup.sh 20000
 # OPTS adds options to every run (e.g. OPTS=--no-groups). Then, when
 # build/radiosity-startup is built, the master's start-up part by part in
-# CPU seconds (load, join, estimate, mesh, groups) for each N.
+# CPU seconds (load, join, estimate, mesh, groups) for each N, and for the
+# Cornell box tessellated K x K and triangulated for each K in TESS
+# (default none), joined and with --no-join (where groups form).
+# STARTUP_BEFORE, if set, is another radiosity-startup run back to back
+# on each scene: its row, and "same" or "DIFFERENT" for whether the two
+# made the same mesh and groups (the hash of the mesh and of every
+# group's members).
+#   STARTUP_BEFORE=/tmp/before/radiosity-startup TESS=47 JOBS= bash bench/startup.sh 20000 200000
+# (JOBS= skips the runs with workers.)
 cd "$(dirname "$0")/.." || exit 1
 RAD=${RADIOSITY:-$PWD/radiosity}
 GEN=${SCENEGEN:-$PWD/build/scenegen}
 [ -x "$GEN" ] || { echo "bench/startup.sh: $GEN missing: make build/scenegen" >&2; exit 1; }
 T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
 [ $# -gt 0 ] || set -- 2000 20000
-JOBS=${JOBS:-2 4}
+JOBS=${JOBS-2 4}
 # Runs "$@" (the master), stamps its stderr lines with seconds since the
 # start, and kills it when J workers have joined and a column was shot;
 # prints: load mesh frame first-joined first-column all-joined.
@@ -46,9 +54,9 @@ watch() {
     waitpid $pid, 0;
     print "$load $mesh $frame $first $col $all\n";' "$J" "$@"
 }
-printf '| binary | faces | load s | mesh s | frame bytes | bytes a face | -j | first joined s | first column s | all joined s |\n'
-printf '|---|---|---|---|---|---|---|---|---|---|\n'
+[ -n "$JOBS" ] && printf '| binary | faces | load s | mesh s | frame bytes | bytes a face | -j | first joined s | first column s | all joined s |\n|---|---|---|---|---|---|---|---|---|---|\n'
 for n in "$@"; do
+  [ -n "$JOBS" ] || break
   "$GEN" boxes "$n" "$T/b.obj" >/dev/null 2>&1 || exit 1
   faces=$(grep -c '^f ' "$T/b.obj")
   # Protocol 3's scene frame: header, 82 fixed bytes, the materials, and
@@ -71,9 +79,25 @@ for n in "$@"; do
 done
 PARTS=${STARTUP:-$PWD/build/radiosity-startup}
 [ -x "$PARTS" ] || exit 0
-printf '\n| scene | load s | join s | estimate s | mesh s | groups s | meshed s | faces | surfaces | elements | groups | hash |\n'
-printf '|---|---|---|---|---|---|---|---|---|---|---|---|\n'
+printf '\n| binary | scene | load s | join s | estimate s | mesh s | groups s | meshed s | faces | surfaces | elements | groups | hash |\n'
+printf '|---|---|---|---|---|---|---|---|---|---|---|---|---|\n'
+# parts OBJ [OPTIONS]: a row per binary; with STARTUP_BEFORE, whether
+# the hashes (the last column) agree.
+parts() {
+  for bin in ${STARTUP_BEFORE:+"$STARTUP_BEFORE"} "$PARTS"; do
+    "$bin" "$@" | sed "s|$T/||" | awk -v b="$bin ${*:2}" '{ sub(/^\| /, "| " b " | "); print }'
+  done | tee "$T/rows"
+  if [ -n "$STARTUP_BEFORE" ]; then
+    [ "$(awk -F'|' '{ print $(NF - 1) }' "$T/rows" | sort -u | wc -l)" = 1 ] &&
+      echo "| same |" || echo "| DIFFERENT |"
+  fi
+}
 for n in "$@"; do
   "$GEN" boxes "$n" "$T/boxes$n.obj" >/dev/null 2>&1 || exit 1
-  "$PARTS" "$T/boxes$n.obj" | sed "s|$T/||"
+  parts "$T/boxes$n.obj"
+done
+for k in $TESS; do
+  "$GEN" tessellate scenes/cornell.obj "$k" "$T/cornell$k.obj" --tri >/dev/null 2>&1 || exit 1
+  parts "$T/cornell$k.obj"
+  parts "$T/cornell$k.obj" --no-join
 done

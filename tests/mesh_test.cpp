@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "point_ids.h"
 #include "test_util.h"
 
 namespace {
@@ -169,4 +170,20 @@ TEST(Mesh, VerticesFreedAtTheReadHookChangeNothing) {
     EXPECT_TRUE(scene.faces[0].verts.empty()) << name;
   }
   EXPECT_GT(corners, 0u);  // some faces joined into surfaces
+}
+
+// Joining sizes the weld table once for every corner: the same ids as a
+// table grown point by point, the first point seen getting the next id.
+TEST(Mesh, PointIdsReservedWeldAsGrown) {
+  std::vector<glm::dvec3> grown_pts, reserved_pts;
+  PointIds grown(&grown_pts), reserved(&reserved_pts);
+  reserved.Reserve(3000);
+  for (int i = 0; i < 3000; ++i) {
+    const glm::dvec3 p(i % 37, (i * 7) % 41, i % 2 ? 0.0 : -0.0);  // repeats, and -0 as 0
+    const int id = grown.Id(p);
+    EXPECT_EQ(reserved.Id(p), id);
+    EXPECT_EQ(grown_pts[size_t(id)], p);
+  }
+  EXPECT_EQ(reserved_pts, grown_pts);
+  EXPECT_LT(grown_pts.size(), 3000u);
 }

@@ -611,6 +611,25 @@ TEST(Scene, NulAndControlBytes) {
   EXPECT_EQ(r.err, "/dev/zero: cannot open: not a regular file");
 }
 
+// The check reads a line eight bytes at a time: a control byte is found
+// at any place of a long line, in a word or in the tail; a tab, bytes of
+// UTF-8 and the bytes just above 0x1f and below 0x7f are text.
+TEST(Scene, ControlBytesAtEveryPlaceOfALine) {
+  const std::string text = "v 0 0 0 # \t" "\xc3\xa9 ~ \x20!0123456789abcdefghijkl";
+  TempDir dir;
+  dir.Write("squares.mtl", kSquaresMtl);
+  Loaded ok = Load(dir.Write("ok.obj", SquaresObj() + text + "\n"));
+  EXPECT_TRUE(ok.ok) << ok.err;
+  for (size_t at = 0; at < text.size(); ++at)
+    for (const char c : {'\x01', '\x1f', '\x7f'}) {
+      std::string line = text;
+      line[at] = c;
+      char want[40];
+      std::snprintf(want, sizeof want, "control byte 0x%02x", (unsigned char)c);
+      ExpectError(std::string(kSquaresVerts) + line + "\n", 9, want);
+    }
+}
+
 // ---- ParseCamera ----------------------------------------------------------
 
 TEST(Scene, ParseCamera) {

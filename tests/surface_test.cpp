@@ -3,10 +3,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <random>
+#include <utility>
 
 #include <gtest/gtest.h>
 
 #include "mesh.h"
+#include "radix_sort.h"
 #include "results.h"
 #include "scheduler.h"
 #include "solver.h"
@@ -232,6 +235,42 @@ TEST(Surface, OverlapAreaOfClippedPolygons) {
   EXPECT_NEAR(OverlapArea(sq, {{0.5, -1}, {2, -1}, {2, 2}, {0.5, 2}}), 0.5, 1e-15);
   EXPECT_NEAR(OverlapArea(sq, {{0, 0}, {1, 0}, {1, 1}}), 0.5, 1e-15);
   EXPECT_EQ(OverlapArea(sq, {{2, 2}, {3, 2}, {3, 3}}), 0.0);
+}
+
+// Joining makes pieces only for faces that can join; the surfaces still
+// come in order of their first face, joined ones among those alone.
+TEST(Surface, FacesAloneAndJoinedKeepTheirFirstFacesOrder) {
+  Scene s = EmptyScene();
+  Add(&s, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}, 0);     // 0: half of a square
+  Add(&s, {{5, 0, 0}, {5, 0, 1}, {5, 1, 1}}, 0);     // 1: alone, another plane
+  Add(&s, {{0, 0, 0}, {1, 1, 0}, {0, 1, 0}}, 0);     // 2: the square's other half
+  Add(&s, {{9, 0, 0}, {10, 0, 0}, {10, 1, 0}}, 0);   // 3: alone, its edges its own
+  const std::vector<Surface> out = BuildSurfaces(s, true);
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_EQ(out[0].faces, (std::vector<int>{0, 2}));
+  EXPECT_EQ(out[0].poly.size(), 4u);
+  EXPECT_EQ(out[1].faces, (std::vector<int>{1}));
+  EXPECT_EQ(out[1].poly, s.faces[1].verts);  // as read
+  EXPECT_EQ(out[2].faces, (std::vector<int>{3}));
+  EXPECT_EQ(out[2].poly, s.faces[3].verts);
+}
+
+// radix_sort.h sorts by the key's bits from `from` up and keeps the order
+// of equal keys, as std::stable_sort would.
+TEST(Surface, RadixSortIsAStableSortByKey) {
+  std::mt19937_64 rng(7);
+  for (int from : {0, 24}) {
+    std::vector<std::pair<uint64_t, int>> items(5000), want;
+    for (size_t i = 0; i < items.size(); ++i)
+      items[i] = {rng() % 64 << 40 | rng() % 3 << 20 | (rng() & 0xffffff), int(i)};
+    items.push_back({~uint64_t{0}, -1});  // the top byte in use, too
+    want = items;
+    std::stable_sort(want.begin(), want.end(), [&](const auto& a, const auto& b) {
+      return a.first >> from < b.first >> from;
+    });
+    RadixSort(&items, [](const std::pair<uint64_t, int>& x) { return x.first; }, from);
+    EXPECT_EQ(items, want) << "from bit " << from;
+  }
 }
 
 }  // namespace
