@@ -63,6 +63,25 @@ class WorkerTest : public ::testing::Test {
     EXPECT_EQ(r.elements, m.elems.size());
     EXPECT_EQ(r.mesh_hash, MeshHash(m));
   }
+  // The next column the worker sent: assignment a's, as ShotColumn draws
+  // it on m (ids exact, form factors within the wire's rounding).
+  void ExpectColumn(Hemicube* h, const Mesh& m, const proto::Assignment& a) {
+    std::string payload, err;
+    Msg type = Next(&payload);
+    while (type == Msg::kHeartbeat) type = Next(&payload);
+    ASSERT_EQ(type, Msg::kColumn);
+    proto::Column c;
+    ASSERT_TRUE(proto::DecodeColumn(payload, &c, &err)) << err;
+    EXPECT_EQ(c.patch, a.patch);
+    EXPECT_EQ(c.k, a.k);
+    std::vector<FormFactor> want;
+    ShotColumn(h, m, a.patch, a.k, false, 1, &want);
+    ASSERT_EQ(c.ff.size(), want.size());
+    for (size_t i = 0; i < want.size(); ++i) {
+      EXPECT_EQ(c.ff[i].elem, want[i].elem) << i;
+      EXPECT_NEAR(c.ff[i].f, want[i].f, proto::kFormFactorError * want[i].f) << i;
+    }
+  }
   // The error frame the worker sent, and its return.
   std::string Error() {
     std::string payload, text, err;
@@ -91,19 +110,8 @@ TEST_F(WorkerTest, ComputesColumnsInOrderAndLeavesOnBye) {
   master_->Send(f);
   const Mesh m = MakeMesh(setup_.scene);
   Hemicube h(16);
-  for (const proto::Assignment a : {proto::Assignment{1, 0}, proto::Assignment{4, 3}}) {
-    std::string payload, err;
-    Msg type = Next(&payload);
-    while (type == Msg::kHeartbeat) type = Next(&payload);
-    ASSERT_EQ(type, Msg::kColumn);
-    proto::Column c;
-    ASSERT_TRUE(proto::DecodeColumn(payload, &c, &err)) << err;
-    EXPECT_EQ(c.patch, a.patch);
-    EXPECT_EQ(c.k, a.k);
-    std::vector<FormFactor> want;
-    ShotColumn(&h, m, a.patch, a.k, false, 1, &want);
-    ASSERT_EQ(c.ff.size(), want.size());
-  }
+  ExpectColumn(&h, m, {1, 0});
+  ExpectColumn(&h, m, {4, 3});
   f.clear();
   proto::EncodeBye(&f);
   master_->Send(f);
@@ -120,22 +128,7 @@ TEST_F(WorkerTest, AColumnAfterDivisionsSeesTheDividedMesh) {
   std::string f;
   proto::EncodeWork({{1, 0}}, &f);
   master_->Send(f);
-  auto column = [&](const proto::Assignment& a) {
-    std::string payload, err;
-    Msg type = Next(&payload);
-    while (type == Msg::kHeartbeat) type = Next(&payload);
-    ASSERT_EQ(type, Msg::kColumn);
-    proto::Column c;
-    ASSERT_TRUE(proto::DecodeColumn(payload, &c, &err)) << err;
-    std::vector<FormFactor> want;
-    ShotColumn(&h, m, a.patch, a.k, false, 1, &want);
-    ASSERT_EQ(c.ff.size(), want.size());
-    for (size_t i = 0; i < want.size(); ++i) {
-      EXPECT_EQ(c.ff[i].elem, want[i].elem) << i;
-      EXPECT_NEAR(c.ff[i].f, want[i].f, proto::kFormFactorError * want[i].f) << i;
-    }
-  };
-  column({1, 0});
+  ExpectColumn(&h, m, {1, 0});
   // Every top element of the last face divided: its children receive
   // from patch 1 (of another face).
   ASSERT_NE(m.patches[1].face, int(m.faces.size()) - 1);
@@ -148,10 +141,10 @@ TEST_F(WorkerTest, AColumnAfterDivisionsSeesTheDividedMesh) {
   proto::EncodeDivide(divided, &f);
   proto::EncodeWork({{1, 1}}, &f);
   master_->Send(f);
-  column({1, 1});
+  ExpectColumn(&h, m, {1, 1});
   std::vector<FormFactor> want;
   ShotColumn(&h, m, 1, 1, false, 1, &want);
-  EXPECT_GE(want.back().elem, before);  // a child's, which column() compared
+  EXPECT_GE(want.back().elem, before);  // a child's, which ExpectColumn compared
 }
 
 // A large scene takes long to arrive and to mesh: the worker says that it
