@@ -502,10 +502,25 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       const uint32_t mask = Visible(nd.lo, nd.hi);
       if (!mask) continue;
       if (nd.right < 0) {
-        // The faces' vertices lie in mesh order, not the hierarchy's: ask
-        // for all of them at once rather than wait for each face's in turn.
-        for (int i = nd.first; i < nd.first + nd.count; ++i)
-          for (int v = faces_[i].vb; v < faces_[i].ve; v += 2) __builtin_prefetch(&mesh.verts[v]);
+        // The next leaf popped (most often this one's sibling) has its
+        // faces asked for now, a leaf's drawing before they are read: at
+        // 10^6 elements they are far from the cache.
+        if (!stack_.empty() && nodes_[stack_.back()].right < 0) {
+          const Node& next = nodes_[stack_.back()];
+          const char* a = reinterpret_cast<const char*>(&faces_[next.first]);
+          const char* b = reinterpret_cast<const char*>(&faces_[next.first + next.count]);
+          for (; a < b; a += 64) __builtin_prefetch(a);
+        }
+        // The faces' vertices lie in mesh order, not the hierarchy's, and
+        // the outlines in rank order: ask for all of them at once rather
+        // than wait for each face's in turn.
+        for (int i = nd.first; i < nd.first + nd.count; ++i) {
+          const CacheFace& cf = faces_[i];
+          for (int v = cf.vb; v < cf.ve; v += 2) __builtin_prefetch(&mesh.verts[v]);
+          __builtin_prefetch(wide_ ? static_cast<const void*>(&outline_wide_[cf.pb])
+                                   : static_cast<const void*>(&outline_[cf.pb]));
+          __builtin_prefetch(&outline_n_[cf.lb]);
+        }
         for (int i = nd.first; i < nd.first + nd.count; ++i) draw(i, mask);
         continue;
       }

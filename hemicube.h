@@ -28,6 +28,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "memory.h"
 #include "mesh.h"
 
 struct FormFactor {
@@ -96,6 +97,10 @@ class Hemicube {
     int first = 0, count = 0;     // a leaf: faces_[first, first + count)
     int right = -1;               // an inner node: its second child (first is next)
   };
+  // The cache's arrays are read at scattered places and at 10^6 elements
+  // are far larger than the TLB reaches in 4 KB pages (memory.h).
+  template <class T>
+  using Huge = std::vector<T, HugePageAllocator<T>>;
   struct Key {
     const Mesh* mesh = nullptr;
     const void* verts = nullptr;
@@ -109,7 +114,7 @@ class Hemicube {
   static Key KeyOf(const Mesh& mesh);
   void BuildCache(const Mesh& mesh);
   // Nodes over faces[order[first, first + count)], reordering `order`.
-  int BuildNodes(const std::vector<CacheFace>& faces, std::vector<int>* order, int first,
+  int BuildNodes(const Huge<CacheFace>& faces, std::vector<int>* order, int first,
                  int count);
   // The hemicube faces (5 bits) box [lo, hi] may cover visibly: not
   // wholly behind the shooter, outside the face or behind its buffer.
@@ -143,16 +148,16 @@ class Hemicube {
   // order: a column reads them front to back, nearly in memory order. The
   // vertices are the mesh's own (a face's are contiguous there but for
   // those Divide added), not copied: that would cost 24 bytes a vertex.
-  std::vector<CacheFace> faces_;
+  Huge<CacheFace> faces_;
   std::vector<int32_t> by_face_;   // faces_ indices in mesh face order
-  std::vector<int32_t> elem_;      // rank -> element id; ranks in face order
+  Huge<int32_t> elem_;             // rank -> element id; ranks in face order
   // Face-relative vertex indices: 16 bits, or 32 in outline_wide_ (and
   // wide_) when a face has more than 65,536 vertices.
-  std::vector<uint16_t> outline_;
-  std::vector<int32_t> outline_wide_;
+  Huge<uint16_t> outline_;
+  Huge<int32_t> outline_wide_;
   bool wide_ = false;
-  std::vector<uint8_t> outline_n_; // per rank: its outline's length
-  std::vector<Node> nodes_;
+  Huge<uint8_t> outline_n_;       // per rank: its outline's length
+  Huge<Node> nodes_;
 
   // Per column: the shooter's frame and per-face scratch.
   glm::dvec3 c_{0.0}, u_{0.0}, v_{0.0}, n_{0.0};
@@ -169,7 +174,7 @@ class Hemicube {
   // element (a light in a room of boxes reaches 64-element blocks all).
   static constexpr int kSumBlock = 8;
   std::vector<double> acc_;
-  std::vector<int32_t> block_;       // per kSumBlock elements: its first sum in acc_, or -1
+  Huge<int32_t> block_;              // per kSumBlock elements: its first sum in acc_, or -1
   std::vector<uint64_t> touched_;    // per element: its sum is in acc_
   long visited_ = 0;                 // leaves drawn this column
 };

@@ -50,12 +50,15 @@ void Hemicube::ReleaseCache() {
 
 void Hemicube::BuildCache(const Mesh& mesh) {
   key_ = KeyOf(mesh);
+  // A column reads the mesh's vertices face by face in the hierarchy's
+  // order, scattered over the array as the cache's own arrays are.
+  PreferHugePages(mesh.verts.data(), mesh.verts.size() * sizeof(mesh.verts[0]));
   // The old cache's largest arrays go first, not kept beside the new ones
   // (a rebuild after divisions).
   FreeStorage(&faces_), FreeStorage(&outline_), FreeStorage(&outline_wide_);
   // First in face order: planes, boxes and ranks (the order a plain
   // z-buffer draws the leaves in, which breaks depth ties).
-  std::vector<CacheFace> byface;
+  Huge<CacheFace> byface;
   std::vector<int> leaves;
   // Reserved to their sizes (an upper bound for byface): grown by doubling,
   // the copies of faces were the largest thing a -j 0 master held.
@@ -175,7 +178,7 @@ void Hemicube::BuildCache(const Mesh& mesh) {
 // a face's own test is as cheap as a node's, and a leaf of 8 small faces
 // costs fewer node tests than it draws in vain (a tessellated scene: about
 // 8% less time than 4 a leaf, 16 no better).
-int Hemicube::BuildNodes(const std::vector<CacheFace>& faces, std::vector<int>* order,
+int Hemicube::BuildNodes(const Huge<CacheFace>& faces, std::vector<int>* order,
                          int first, int count) {
   constexpr int kLeafFaces = 8;
   const int at = int(nodes_.size());
