@@ -486,7 +486,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
     if (!(s > coplanar_)) return;                          // seen from behind or edge-on
     // `mask` is its node's; a face of a few leaves is drawn under that, as
     // testing it again would cost about what drawing it does.
-    if (culling_ && cf.le - cf.lb > 4 && !(mask = Visible(cf.lo, cf.hi))) return;
+    if (culling_ && cf.le - cf.lb > 4 && !(mask = Visible(boxes_[f].Lo(), boxes_[f].Hi()))) return;
     DrawFace(mesh, f, mask, stats ? clock : nullptr);
   };
   if (!culling_) {

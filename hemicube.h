@@ -81,16 +81,26 @@ class Hemicube {
   // The mesh as the column reads it, rebuilt when the mesh changes (built,
   // divided, replaced; Key): flat, in the order it is read, each face's
   // leaves contiguous with their outlines precomputed. About 14 bytes an
-  // element (a quad's) and 140 a face; the sums only where a column reaches.
-  struct CacheFace {
+  // element (a quad's) and 88 a face; the sums only where a column reaches.
+  // A face is what drawing it reads, one cache line (the array is aligned
+  // to 64); its box, read only to cull a face of many leaves and to build
+  // the hierarchy, is apart in boxes_.
+  struct alignas(64) CacheFace {
     glm::dvec3 normal{0.0};
     double offset = 0;
-    glm::dvec3 lo{0.0}, hi{0.0};  // bounding box of its vertices
     int face = -1;                // in the mesh
     int vb = 0, ve = 0;           // its vertices: Mesh::verts[vb, ve)
     int nd = 0;                   // and its divide_verts' count
     int lb = 0, le = 0;           // its leaves' ranks: [lb, le)
     int pb = 0;                   // its first leaf's outline in outline_
+  };
+  // The bounding box of a face's vertices in float, rounded outward: a
+  // box a little larger culls a little less, never a face it should draw
+  // (the columns are the same).
+  struct FaceBox {
+    float lo[3], hi[3];
+    glm::dvec3 Lo() const { return glm::dvec3(lo[0], lo[1], lo[2]); }
+    glm::dvec3 Hi() const { return glm::dvec3(hi[0], hi[1], hi[2]); }
   };
   struct Node {                   // of the hierarchy over faces, depth first
     glm::dvec3 lo{0.0}, hi{0.0};
@@ -113,8 +123,8 @@ class Hemicube {
   };
   static Key KeyOf(const Mesh& mesh);
   void BuildCache(const Mesh& mesh);
-  // Nodes over faces[order[first, first + count)], reordering `order`.
-  int BuildNodes(const Huge<CacheFace>& faces, std::vector<int>* order, int first,
+  // Nodes over faces boxes[order[first, first + count)], reordering `order`.
+  int BuildNodes(const Huge<FaceBox>& boxes, std::vector<int>* order, int first,
                  int count);
   // The hemicube faces (5 bits) box [lo, hi] may cover visibly: not
   // wholly behind the shooter, outside the face or behind its buffer.
@@ -149,6 +159,7 @@ class Hemicube {
   // vertices are the mesh's own (a face's are contiguous there but for
   // those Divide added), not copied: that would cost 24 bytes a vertex.
   Huge<CacheFace> faces_;
+  Huge<FaceBox> boxes_;            // per faces_ entry
   std::vector<int32_t> by_face_;   // faces_ indices in mesh face order
   Huge<int32_t> elem_;             // rank -> element id; ranks in face order
   // Face-relative vertex indices: 16 bits, or 32 in outline_wide_ (and
