@@ -59,7 +59,7 @@ class Hemicube {
   void Column(const Mesh& mesh, int shooter, double angle,
               std::vector<FormFactor>* out, ColumnStats* stats = nullptr);
 
-  // Frees the copy of the mesh the columns read (the cache, about 46
+  // Frees the copy of the mesh the columns read (the cache, about 42
   // bytes an element) now, not at the next Column's rebuild: for a mesh
   // that has just changed, so that what comes before that column (a
   // wave's picture) does not stand beside a copy rebuilt anyway.
@@ -130,7 +130,7 @@ class Hemicube {
   // wholly behind the shooter, outside the face or behind its buffer.
   uint32_t Visible(const glm::dvec3& lo, const glm::dvec3& hi);
   bool Open(int h, int xa, int xb, int ra, int rb, float zt);
-  bool Hidden(int h, const float (*pt)[2], int n, float za, float zb, float zc);
+  bool Skip(int h, const float (*pt)[2], int n, float za, float zb, float zc);
   // Its vertices into the shooter's frame, its leaves into the buffers of
   // the hemicube faces in `mask`; adds to clock's stages when non-null.
   void DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock);
