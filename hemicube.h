@@ -17,7 +17,8 @@
 // back; a node or face is skipped whole when it lies behind the shooter,
 // outside every hemicube face, or behind the depths already drawn (a
 // kTile-pixel tile's least depth, then pixels); so is a leaf that covers
-// 64 pixels or more, before it is scanned. So a column costs about
+// 64 pixels or more, before it is scanned, and one whose pixel box holds
+// no pixel centre (a finely cut scene's many). So a column costs about
 // its visible faces and its pixels, not the scene: the maze or a room of
 // boxes leaves most of its elements unread. The item buffer holds leaf
 // ranks (their order in the flat copy), which break depth ties as the
@@ -69,7 +70,7 @@ class Hemicube {
   // bounding-volume hierarchy and skipped, with their elements unread,
   // where they lie wholly behind the shooter, outside a hemicube face or
   // behind what that face's item buffer already holds (and so are large
-  // leaves, one by one). Off: every front-facing face on every hemicube
+  // leaves and those between pixel centres, one by one). Off: every front-facing face on every hemicube
   // face, in face order, as a plain z-buffer would. The columns are the same either way (the tests compare
   // them): culled faces could not have won a pixel, and depth ties go to
   // the element drawn first in face order whatever order they are drawn in.
