@@ -225,13 +225,15 @@ bool Hemicube::Open(int h, int xa, int xb, int ra, int rb, float zt) {
   return false;
 }
 
-// Whether a large leaf (pixel bounding box of kHiddenArea or more) lies
-// wholly behind what face h holds: its nearest depth over that box (the
-// plane's at a corner, in double, raised well past Scan's float rounding)
-// against the tiles, as Visible tests boxes. Small leaves are drawn
-// straight away: the test would cost what drawing them does. A hidden
-// leaf could not win a pixel, so skipping it leaves the buffer as it is.
-bool Hemicube::Hidden(int h, const float (*pt)[2], int n, float za, float zb, float zc) {
+// Whether a leaf, polygon pt[0..n) on face h, could win no pixel, so that
+// Scan need not be called: no pixel centre within its bounding box (most
+// leaves of a finely cut scene, smaller than a pixel), or, for a large
+// leaf (pixel bounding box of kHiddenArea or more), wholly behind what face
+// h holds: its nearest depth over that box (the plane's at a corner, in
+// double, raised well past Scan's float rounding) against the tiles, as
+// Visible tests boxes. A leaf skipped could not have written a pixel, so
+// the buffer is as Scan would have left it.
+bool Hemicube::Skip(int h, const float (*pt)[2], int n, float za, float zb, float zc) {
   constexpr double kHiddenArea = 64;
   float x0 = pt[0][0], x1 = x0, y0 = pt[0][1], y1 = y0;
   for (int i = 1; i < n; ++i) {
@@ -241,6 +243,22 @@ bool Hemicube::Hidden(int h, const float (*pt)[2], int n, float za, float zb, fl
     y1 = std::max(y1, pt[i][1]);
   }
   const int R = res_, H = h == 0 ? R : R / 2;
+  // Scan's rows, exactly as it finds them: none, nothing drawn.
+  const float lim = 1e9f;
+  if (std::max(0, Ceil(std::max(y0, -lim) - 0.5f)) >= std::min(H, Ceil(std::min(y1, lim) - 0.5f)))
+    return true;
+  if (y1 - y0 < 8) {
+    // Scan's edge crossings lie in [x0, x1] but for float rounding (a few
+    // 2^-24 of |x| and of the width) and 16.16 steps (under 2^-16 a row,
+    // 9 rows at most here): m is far above both. No pixel centre i + 1/2
+    // in [x0 - m, x1 + m], 0 <= i < R: no pixel lies between crossings.
+    const double m = 0x1p-10 + 0x1p-20 * (std::max(std::abs(x0), std::abs(x1)) + (x1 - x0));
+    const double lo = std::clamp(double(x0) - m - 0.5, -2.0, R + 2.0);
+    const double hi = std::clamp(double(x1) + m - 0.5, -2.0, R + 2.0);
+    const int first = std::max(0, int(lo + 2) - 2 + (int(lo + 2) - 2 < lo));  // ceil(lo)
+    const int last = std::min(R - 1, int(hi + 2) - 2);                         // floor(hi)
+    if (first > last) return true;
+  }
   if (!(double(x1 - x0) * double(y1 - y0) >= kHiddenArea)) return false;
   const int xa = std::max(0, int(std::floor(std::max(x0, -2.0f))) - 1);
   const int xb = std::min(R, int(std::ceil(std::min(x1, R + 2.0f))) + 1);
@@ -390,7 +408,7 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
             pt[i][0] = sx_[h][vid[i]];
             pt[i][1] = sy_[h][vid[i]];
           }
-          if (!culling_ || !Hidden(h, pt, n, za[h], zb[h], zc[h])) Scan(h, pt, n, za[h], zb[h], zc[h], r);
+          if (!culling_ || !Skip(h, pt, n, za[h], zb[h], zc[h])) Scan(h, pt, n, za[h], zb[h], zc[h], r);
           continue;
         }
         // Crosses the near plane: clip in this face's frame, then project.
@@ -486,7 +504,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
     if (!(s > coplanar_)) return;                          // seen from behind or edge-on
     // `mask` is its node's; a face of a few leaves is drawn under that, as
     // testing it again would cost about what drawing it does.
-    if (culling_ && cf.le - cf.lb > 4 && !(mask = Visible(cf.lo, cf.hi))) return;
+    if (culling_ && cf.le - cf.lb > 4 && !(mask = Visible(boxes_[f].Lo(), boxes_[f].Hi()))) return;
     DrawFace(mesh, f, mask, stats ? clock : nullptr);
   };
   if (!culling_) {
@@ -502,10 +520,26 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       const uint32_t mask = Visible(nd.lo, nd.hi);
       if (!mask) continue;
       if (nd.right < 0) {
-        // The faces' vertices lie in mesh order, not the hierarchy's: ask
-        // for all of them at once rather than wait for each face's in turn.
-        for (int i = nd.first; i < nd.first + nd.count; ++i)
-          for (int v = faces_[i].vb; v < faces_[i].ve; v += 2) __builtin_prefetch(&mesh.verts[v]);
+        // The next leaf popped (most often this one's sibling) has its
+        // faces asked for now, a leaf's drawing before they are read: at
+        // 10^6 elements they are far from the cache.
+        if (!stack_.empty() && nodes_[stack_.back()].right < 0) {
+          const Node& next = nodes_[stack_.back()];
+          const char* a = reinterpret_cast<const char*>(&faces_[next.first]);
+          const char* b = reinterpret_cast<const char*>(&faces_[next.first + next.count]);
+          for (; a < b; a += 64) __builtin_prefetch(a);
+        }
+        // The faces' vertices lie in mesh order, not the hierarchy's, and
+        // the outlines in rank order: ask for all of them at once rather
+        // than wait for each face's in turn.
+        for (int i = nd.first; i < nd.first + nd.count; ++i) {
+          const CacheFace& cf = faces_[i];
+          if (cf.le - cf.lb > 4) __builtin_prefetch(&boxes_[i]);  // draw tests its box
+          for (int v = cf.vb; v < cf.ve; v += 2) __builtin_prefetch(&mesh.verts[v]);
+          __builtin_prefetch(wide_ ? static_cast<const void*>(&outline_wide_[cf.pb])
+                                   : static_cast<const void*>(&outline_[cf.pb]));
+          __builtin_prefetch(&outline_n_[cf.lb]);
+        }
         for (int i = nd.first; i < nd.first + nd.count; ++i) draw(i, mask);
         continue;
       }

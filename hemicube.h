@@ -17,7 +17,8 @@
 // back; a node or face is skipped whole when it lies behind the shooter,
 // outside every hemicube face, or behind the depths already drawn (a
 // kTile-pixel tile's least depth, then pixels); so is a leaf that covers
-// 64 pixels or more, before it is scanned. So a column costs about
+// 64 pixels or more, before it is scanned, and one whose pixel box holds
+// no pixel centre (a finely cut scene's many). So a column costs about
 // its visible faces and its pixels, not the scene: the maze or a room of
 // boxes leaves most of its elements unread. The item buffer holds leaf
 // ranks (their order in the flat copy), which break depth ties as the
@@ -28,6 +29,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "memory.h"
 #include "mesh.h"
 
 struct FormFactor {
@@ -58,7 +60,7 @@ class Hemicube {
   void Column(const Mesh& mesh, int shooter, double angle,
               std::vector<FormFactor>* out, ColumnStats* stats = nullptr);
 
-  // Frees the copy of the mesh the columns read (the cache, about 46
+  // Frees the copy of the mesh the columns read (the cache, about 42
   // bytes an element) now, not at the next Column's rebuild: for a mesh
   // that has just changed, so that what comes before that column (a
   // wave's picture) does not stand beside a copy rebuilt anyway.
@@ -68,7 +70,7 @@ class Hemicube {
   // bounding-volume hierarchy and skipped, with their elements unread,
   // where they lie wholly behind the shooter, outside a hemicube face or
   // behind what that face's item buffer already holds (and so are large
-  // leaves, one by one). Off: every front-facing face on every hemicube
+  // leaves and those between pixel centres, one by one). Off: every front-facing face on every hemicube
   // face, in face order, as a plain z-buffer would. The columns are the same either way (the tests compare
   // them): culled faces could not have won a pixel, and depth ties go to
   // the element drawn first in face order whatever order they are drawn in.
@@ -80,22 +82,36 @@ class Hemicube {
   // The mesh as the column reads it, rebuilt when the mesh changes (built,
   // divided, replaced; Key): flat, in the order it is read, each face's
   // leaves contiguous with their outlines precomputed. About 14 bytes an
-  // element (a quad's) and 140 a face; the sums only where a column reaches.
-  struct CacheFace {
+  // element (a quad's) and 88 a face; the sums only where a column reaches.
+  // A face is what drawing it reads, one cache line (the array is aligned
+  // to 64); its box, read only to cull a face of many leaves and to build
+  // the hierarchy, is apart in boxes_.
+  struct alignas(64) CacheFace {
     glm::dvec3 normal{0.0};
     double offset = 0;
-    glm::dvec3 lo{0.0}, hi{0.0};  // bounding box of its vertices
     int face = -1;                // in the mesh
     int vb = 0, ve = 0;           // its vertices: Mesh::verts[vb, ve)
     int nd = 0;                   // and its divide_verts' count
     int lb = 0, le = 0;           // its leaves' ranks: [lb, le)
     int pb = 0;                   // its first leaf's outline in outline_
   };
+  // The bounding box of a face's vertices in float, rounded outward: a
+  // box a little larger culls a little less, never a face it should draw
+  // (the columns are the same).
+  struct FaceBox {
+    float lo[3], hi[3];
+    glm::dvec3 Lo() const { return glm::dvec3(lo[0], lo[1], lo[2]); }
+    glm::dvec3 Hi() const { return glm::dvec3(hi[0], hi[1], hi[2]); }
+  };
   struct Node {                   // of the hierarchy over faces, depth first
     glm::dvec3 lo{0.0}, hi{0.0};
     int first = 0, count = 0;     // a leaf: faces_[first, first + count)
     int right = -1;               // an inner node: its second child (first is next)
   };
+  // The cache's arrays are read at scattered places and at 10^6 elements
+  // are far larger than the TLB reaches in 4 KB pages (memory.h).
+  template <class T>
+  using Huge = std::vector<T, HugePageAllocator<T>>;
   struct Key {
     const Mesh* mesh = nullptr;
     const void* verts = nullptr;
@@ -108,14 +124,14 @@ class Hemicube {
   };
   static Key KeyOf(const Mesh& mesh);
   void BuildCache(const Mesh& mesh);
-  // Nodes over faces[order[first, first + count)], reordering `order`.
-  int BuildNodes(const std::vector<CacheFace>& faces, std::vector<int>* order, int first,
+  // Nodes over faces boxes[order[first, first + count)], reordering `order`.
+  int BuildNodes(const Huge<FaceBox>& boxes, std::vector<int>* order, int first,
                  int count);
   // The hemicube faces (5 bits) box [lo, hi] may cover visibly: not
   // wholly behind the shooter, outside the face or behind its buffer.
   uint32_t Visible(const glm::dvec3& lo, const glm::dvec3& hi);
   bool Open(int h, int xa, int xb, int ra, int rb, float zt);
-  bool Hidden(int h, const float (*pt)[2], int n, float za, float zb, float zc);
+  bool Skip(int h, const float (*pt)[2], int n, float za, float zb, float zc);
   // Its vertices into the shooter's frame, its leaves into the buffers of
   // the hemicube faces in `mask`; adds to clock's stages when non-null.
   void DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock);
@@ -143,16 +159,17 @@ class Hemicube {
   // order: a column reads them front to back, nearly in memory order. The
   // vertices are the mesh's own (a face's are contiguous there but for
   // those Divide added), not copied: that would cost 24 bytes a vertex.
-  std::vector<CacheFace> faces_;
+  Huge<CacheFace> faces_;
+  Huge<FaceBox> boxes_;            // per faces_ entry
   std::vector<int32_t> by_face_;   // faces_ indices in mesh face order
-  std::vector<int32_t> elem_;      // rank -> element id; ranks in face order
+  Huge<int32_t> elem_;             // rank -> element id; ranks in face order
   // Face-relative vertex indices: 16 bits, or 32 in outline_wide_ (and
   // wide_) when a face has more than 65,536 vertices.
-  std::vector<uint16_t> outline_;
-  std::vector<int32_t> outline_wide_;
+  Huge<uint16_t> outline_;
+  Huge<int32_t> outline_wide_;
   bool wide_ = false;
-  std::vector<uint8_t> outline_n_; // per rank: its outline's length
-  std::vector<Node> nodes_;
+  Huge<uint8_t> outline_n_;       // per rank: its outline's length
+  Huge<Node> nodes_;
 
   // Per column: the shooter's frame and per-face scratch.
   glm::dvec3 c_{0.0}, u_{0.0}, v_{0.0}, n_{0.0};
@@ -169,7 +186,7 @@ class Hemicube {
   // element (a light in a room of boxes reaches 64-element blocks all).
   static constexpr int kSumBlock = 8;
   std::vector<double> acc_;
-  std::vector<int32_t> block_;       // per kSumBlock elements: its first sum in acc_, or -1
+  Huge<int32_t> block_;              // per kSumBlock elements: its first sum in acc_, or -1
   std::vector<uint64_t> touched_;    // per element: its sum is in acc_
   long visited_ = 0;                 // leaves drawn this column
 };

@@ -43,23 +43,28 @@ Hemicube::Key Hemicube::KeyOf(const Mesh& mesh) {
 
 void Hemicube::ReleaseCache() {
   key_ = Key();  // no mesh's: the next Column builds the cache again
-  FreeStorage(&faces_), FreeStorage(&by_face_), FreeStorage(&elem_), FreeStorage(&outline_);
+  FreeStorage(&faces_), FreeStorage(&boxes_), FreeStorage(&by_face_), FreeStorage(&elem_), FreeStorage(&outline_);
   FreeStorage(&outline_wide_), FreeStorage(&outline_n_), FreeStorage(&nodes_), FreeStorage(&acc_);
   FreeStorage(&block_), FreeStorage(&touched_);
 }
 
 void Hemicube::BuildCache(const Mesh& mesh) {
   key_ = KeyOf(mesh);
+  // A column reads the mesh's vertices face by face in the hierarchy's
+  // order, scattered over the array as the cache's own arrays are.
+  PreferHugePages(mesh.verts.data(), mesh.verts.size() * sizeof(mesh.verts[0]));
   // The old cache's largest arrays go first, not kept beside the new ones
   // (a rebuild after divisions).
-  FreeStorage(&faces_), FreeStorage(&outline_), FreeStorage(&outline_wide_);
+  FreeStorage(&faces_), FreeStorage(&boxes_), FreeStorage(&outline_), FreeStorage(&outline_wide_);
   // First in face order: planes, boxes and ranks (the order a plain
   // z-buffer draws the leaves in, which breaks depth ties).
-  std::vector<CacheFace> byface;
+  Huge<CacheFace> byface;
+  Huge<FaceBox> bybox;
   std::vector<int> leaves;
   // Reserved to their sizes (an upper bound for byface): grown by doubling,
   // the copies of faces were the largest thing a -j 0 master held.
   byface.reserve(mesh.faces.size());
+  bybox.reserve(mesh.faces.size());
   elem_.clear();
   elem_.reserve(size_t(mesh.LeafCount()));
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
@@ -75,40 +80,51 @@ void Hemicube::BuildCache(const Mesh& mesh) {
     }
     cf.le = int(elem_.size());
     if (cf.le == cf.lb) continue;  // nothing to draw
-    cf.lo = cf.hi = mesh.verts[mf.vbegin];
+    glm::dvec3 lo = mesh.verts[mf.vbegin], hi = lo;
     auto grow = [&](int i) {
-      cf.lo = glm::min(cf.lo, mesh.verts[i]);
-      cf.hi = glm::max(cf.hi, mesh.verts[i]);
+      lo = glm::min(lo, mesh.verts[i]);
+      hi = glm::max(hi, mesh.verts[i]);
     };
     for (int i = mf.vbegin; i < mf.vend; ++i) grow(i);
     for (int i : mf.divide_verts) grow(i);
+    FaceBox box;
+    for (int a = 0; a < 3; ++a) {
+      box.lo[a] = float(lo[a]);
+      if (double(box.lo[a]) > lo[a]) box.lo[a] = std::nextafter(box.lo[a], -INFINITY);
+      box.hi[a] = float(hi[a]);
+      if (double(box.hi[a]) < hi[a]) box.hi[a] = std::nextafter(box.hi[a], INFINITY);
+    }
     byface.push_back(cf);
+    bybox.push_back(box);
   }
   std::vector<int> order(byface.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = int(i);
   nodes_.clear();
-  if (!order.empty()) BuildNodes(byface, &order, 0, int(order.size()));
+  if (!order.empty()) BuildNodes(bybox, &order, 0, int(order.size()));
 
   // Then laid out in the hierarchy's order, the order a column reads them:
-  // each face's vertices and its leaves' outlines together. The faces are
-  // permuted in place, cycle by cycle: a second copy of them was the
-  // largest thing a worker held while it built the cache.
+  // each face's vertices and its leaves' outlines together. The faces and
+  // boxes are permuted in place, cycle by cycle: a second copy of them was
+  // the largest thing a worker held while it built the cache.
   faces_ = std::move(byface);
+  boxes_ = std::move(bybox);
   by_face_.assign(order.size(), 0);
-  {
+  auto permute = [&order](auto* a) {
     std::vector<bool> done(order.size());
     for (size_t i = 0; i < order.size(); ++i) {
       if (done[i]) continue;
-      const CacheFace first = faces_[i];
+      const auto first = (*a)[i];
       size_t j = i;
       for (size_t k = size_t(order[j]); k != i; j = k, k = size_t(order[k])) {
-        faces_[j] = faces_[k];
+        (*a)[j] = (*a)[k];
         done[j] = true;
       }
-      faces_[j] = first;
+      (*a)[j] = first;
       done[j] = true;
     }
-  }
+  };
+  permute(&faces_);
+  permute(&boxes_);
   // Each leaf's outline, counted first so that it is allocated once at
   // its size (grown by doubling, its old copies stayed resident).
   outline_n_.resize(elem_.size());
@@ -175,17 +191,17 @@ void Hemicube::BuildCache(const Mesh& mesh) {
 // a face's own test is as cheap as a node's, and a leaf of 8 small faces
 // costs fewer node tests than it draws in vain (a tessellated scene: about
 // 8% less time than 4 a leaf, 16 no better).
-int Hemicube::BuildNodes(const std::vector<CacheFace>& faces, std::vector<int>* order,
+int Hemicube::BuildNodes(const Huge<FaceBox>& boxes, std::vector<int>* order,
                          int first, int count) {
   constexpr int kLeafFaces = 8;
   const int at = int(nodes_.size());
   nodes_.emplace_back();
   Node nd;
-  nd.lo = faces[(*order)[first]].lo;
-  nd.hi = faces[(*order)[first]].hi;
+  nd.lo = boxes[(*order)[first]].Lo();
+  nd.hi = boxes[(*order)[first]].Hi();
   for (int i = first; i < first + count; ++i) {
-    nd.lo = glm::min(nd.lo, faces[(*order)[i]].lo);
-    nd.hi = glm::max(nd.hi, faces[(*order)[i]].hi);
+    nd.lo = glm::min(nd.lo, boxes[(*order)[i]].Lo());
+    nd.hi = glm::max(nd.hi, boxes[(*order)[i]].Hi());
   }
   if (count <= kLeafFaces) {
     nd.first = first;
@@ -196,11 +212,11 @@ int Hemicube::BuildNodes(const std::vector<CacheFace>& faces, std::vector<int>* 
     const int mid = first + count / 2;
     std::nth_element(order->begin() + first, order->begin() + mid,
                      order->begin() + first + count, [&](int a, int b) {
-                       return faces[a].lo[axis] + faces[a].hi[axis] <
-                              faces[b].lo[axis] + faces[b].hi[axis];
+                       return double(boxes[a].lo[axis]) + boxes[a].hi[axis] <
+                              double(boxes[b].lo[axis]) + boxes[b].hi[axis];
                      });
-    BuildNodes(faces, order, first, mid - first);
-    nd.right = BuildNodes(faces, order, mid, first + count - mid);
+    BuildNodes(boxes, order, first, mid - first);
+    nd.right = BuildNodes(boxes, order, mid, first + count - mid);
   }
   nodes_[at] = nd;
   return at;

@@ -18,7 +18,7 @@ mode=${1:-full}
 res=${R:-256}
 n=${COLUMNS:-40}
 rev=${BEFORE:-5298a27}
-objs="build/clock.o build/scene.o build/surface.o build/mesh.o build/divide.o build/groups.o build/files.o"
+objs="build/clock.o build/scene.o build/surface.o build/mesh.o build/divide.o build/groups.o build/files.o build/memory.o"
 for b in build/radiosity-column build/scenegen $objs; do
   [ -e "$b" ] || { echo "bench/column.sh: $b missing: run make build/radiosity-column build/scenegen" >&2; exit 1; }
 done

@@ -217,6 +217,63 @@ TEST(Hemicube, CullingGivesThePlainZBuffersColumns) {
   }
 }
 
+// Quad a b c d (counter-clockwise seen from its front) cut k x k and each
+// cell into two triangles, every one a face of its own (as scenegen
+// tessellate --tri makes them, meshed without joining).
+void AddTessellated(Scene* s, const glm::dvec3 (&q)[4], int k) {
+  auto at = [&](int i, int j) {
+    const double u = double(i) / k, v = double(j) / k;
+    return (1 - v) * ((1 - u) * q[0] + u * q[1]) + v * ((1 - u) * q[3] + u * q[2]);
+  };
+  for (int j = 0; j < k; ++j)
+    for (int i = 0; i < k; ++i) {
+      AddFace(s, {at(i, j), at(i + 1, j), at(i + 1, j + 1)}, glm::dvec3(0.5), glm::dvec3(0));
+      AddFace(s, {at(i, j), at(i + 1, j + 1), at(i, j + 1)}, glm::dvec3(0.5), glm::dvec3(0));
+    }
+}
+
+// The same on a finely cut scene, where most leaves are smaller than a
+// pixel and most faces are two triangles: a closed room cut 24 x 24 a
+// wall, a box in it hiding part of it, faces kept apart. With the
+// hierarchy's boxes in float, the column is the plain z-buffer's bit for
+// bit, and culling reads fewer elements.
+TEST(Hemicube, CullingGivesThePlainZBuffersColumnsOnATessellatedScene) {
+  Scene s = EmptyScene();
+  const Scene room = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(0)});
+  for (const Face& f : room.faces) AddTessellated(&s, {f.verts[0], f.verts[1], f.verts[2], f.verts[3]}, 24);
+  // The box [0.3, 0.6]^3 facing out: the room's faces shrunk, turned round.
+  for (const Face& f : room.faces) {
+    glm::dvec3 q[4];
+    for (int i = 0; i < 4; ++i) q[i] = glm::dvec3(0.3) + 0.3 * f.verts[3 - i];
+    AddTessellated(&s, q, 8);
+  }
+  s.materials[1].ke = glm::dvec3(1.0);  // a light, so that the mesh has a shooter to start from
+  MeshOptions o;
+  o.join = false;
+  Mesh m = MakeMesh(s, o);
+  ASSERT_GT(m.elems.size(), 20000u);
+  Hemicube culled(64), plain(64);
+  plain.set_culling(false);
+  ColumnStats cs, ps;
+  std::vector<FormFactor> a, b;
+  const int n = int(m.patches.size());
+  for (int i = 0; i < 16; ++i) {
+    const int p = int((int64_t(i) * 7919) % n);
+    const double angle = ShotAngle(1, p, 0);
+    culled.Column(m, p, angle, &a, &cs);
+    plain.Column(m, p, angle, &b, &ps);
+    ASSERT_FALSE(a.empty());
+    ASSERT_EQ(a.size(), b.size()) << "patch " << p;
+    for (size_t k = 0; k < a.size(); ++k) {
+      ASSERT_EQ(a[k].elem, b[k].elem) << "patch " << p;
+      ASSERT_EQ(a[k].f, b[k].f) << "patch " << p << " element " << a[k].elem;
+    }
+  }
+  EXPECT_LT(cs.elements, ps.elements);
+  // Most leaves are below a pixel: far fewer are covered than drawn.
+  EXPECT_LT(cs.covered * 2, ps.elements);
+}
+
 // The one column function every process calls: turned by the shot's hash
 // angle when rotating, not at all otherwise; the hash depends on seed,
 // patch and k, so that a patch's shots turn differently.
