@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "check.h"
+#include "memory.h"
 #include "radix_sort.h"
 
 namespace {
@@ -238,7 +239,7 @@ class Grouper {
       order_[i] = int(keyed[i] & ((uint64_t{1} << kIdBits) - 1));
       slot_of_[size_t(order_[i])] = int(i);
     }
-    std::vector<uint64_t>().swap(keyed);
+    FreeStorage(&keyed);
     // The boxes in the tree's order (a leaf's are read in a row), written
     // to their places as the mesh is read in its own order.
     elo_.resize(n);

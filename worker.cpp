@@ -249,7 +249,7 @@ int Worker::Run(std::string* err) {
           // The faces with their vertices (some 65 bytes an element, in as
           // many blocks as faces) go back to the system before the elements
           // are made: from here BuildMesh reads only the materials.
-          std::vector<Face>().swap(setup.scene.faces);
+          FreeStorage(&setup.scene.faces);
           malloc_trim(0);
         }))
       return Fail(why, err);
@@ -259,9 +259,7 @@ int Worker::Run(std::string* err) {
   setup.scene = Scene();
   // Nor the mesh's links back to the scene's faces, which only the
   // master's results read.
-  std::vector<int32_t>().swap(mesh_.face_scene);
-  std::vector<int>().swap(mesh_.corner_begin);
-  std::vector<glm::dvec3>().swap(mesh_.face_corners);
+  FreeStorage(&mesh_.face_scene), FreeStorage(&mesh_.corner_begin), FreeStorage(&mesh_.face_corners);
   // Its hundreds of thousands of small blocks freed go back to the system
   // (glibc keeps them otherwise), before the hemicube's arrays come.
   malloc_trim(0);
