@@ -2,7 +2,6 @@
 
 #include <algorithm>
 
-
 void ShooterQueue::Build(const std::vector<double>& bounds, const std::vector<double>& weights) {
   CHECK(weights.size() == bounds.size());
   if (bounds.size() < size_t(n_)) taken_.clear();
@@ -25,13 +24,18 @@ void ShooterQueue::Build(const std::vector<double>& bounds, const std::vector<do
     CHECK(weights[i] >= 0);
     weight_[i] = weights[i];
   }
+  Recompute(&weight_);
+  Recompute(&tree_);
+  dirty_.clear();
+  rebuild_ = false;
+  visited_ = 0;
+}
+
+// Every inner node of *v from its children, level by level up.
+void ShooterQueue::Recompute(std::vector<double, HugePageAllocator<double>>* v) const {
   for (int l = 1; l < int(first_.size()); ++l)
     for (size_t k = 0, nodes = (first_[size_t(l)] - first_[size_t(l) - 1]) / kFanout; k < nodes; ++k)
-      weight_[first_[size_t(l)] + k] = Max(weight_, l, k);
-  dirty_.clear();
-  rebuild_ = true;
-  Flush();
-  visited_ = 0;
+      (*v)[first_[size_t(l)] + k] = Max(*v, l, k);
 }
 
 // The greatest of node k's children (of level l - 1) in v.
@@ -62,9 +66,7 @@ void ShooterQueue::Shrunk(int i) {
 // as a node per kFanout leaves changed) when so many shrank.
 void ShooterQueue::Flush() {
   if (rebuild_ || kFanout * dirty_.size() > size_t(n_)) {
-    for (int l = 1; l < int(first_.size()); ++l)
-      for (size_t k = 0, nodes = (first_[size_t(l)] - first_[size_t(l) - 1]) / kFanout; k < nodes; ++k)
-        Node(l, k) = Max(tree_, l, k);
+    Recompute(&tree_);
     dirty_.clear();
     rebuild_ = false;
     return;

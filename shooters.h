@@ -92,6 +92,7 @@ class ShooterQueue {
   // Node k of level l (0: the leaves, shooter i is leaf i).
   double& Node(int l, size_t k) { return tree_[first_[size_t(l)] + k]; }
   double Max(const std::vector<double, HugePageAllocator<double>>& v, int l, size_t k) const;
+  void Recompute(std::vector<double, HugePageAllocator<double>>* v) const;
   template <class Power>
   void Visit(int level, size_t node, double drift, const Power& power, int* best, double* best_power);
 
