@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 
 #include "check.h"
 #include "clock.h"
@@ -97,6 +98,15 @@ inline int Ceil(float v) {
   return i + (float(i) < v);
 }
 
+// The pixel rows a polygon spanning [y0, y1] in y covers on a hemicube
+// face of H rows: those whose centre y + 1/2 lies within, [first, second)
+// (empty when first >= second). Scan draws these; Skip's test of them
+// must find the very same.
+inline std::pair<int, int> Rows(float y0, float y1, int H) {
+  const float lim = 1e9f;  // keeps Ceil in range; far outside any face
+  return {std::max(0, Ceil(std::max(y0, -lim) - 0.5f)), std::min(H, Ceil(std::min(y1, lim) - 0.5f))};
+}
+
 // 16.16 fixed point for edge crossings: rows then step by one integer add,
 // and ceil is a shift. |v| is kept below 1e9 pixels.
 inline int64_t Fixed(float v) {
@@ -161,9 +171,7 @@ void Hemicube::Scan(int face, const float (*pt)[2], int n, float za, float zb,
     if (pt[i][1] < pt[top][1]) top = i;
     if (pt[i][1] > pt[bottom][1]) bottom = i;
   }
-  const float lim = 1e9f;  // keeps Ceil in range; far outside any face
-  const int ya = std::max(0, Ceil(std::max(pt[top][1], -lim) - 0.5f));
-  const int yb = std::min(H, Ceil(std::min(pt[bottom][1], lim) - 0.5f));
+  const auto [ya, yb] = Rows(pt[top][1], pt[bottom][1], H);
   if (ya >= yb) return;
   rows_[face][0] = std::min(rows_[face][0], ya);
   rows_[face][1] = std::max(rows_[face][1], yb);
@@ -243,10 +251,9 @@ bool Hemicube::Skip(int h, const float (*pt)[2], int n, float za, float zb, floa
     y1 = std::max(y1, pt[i][1]);
   }
   const int R = res_, H = h == 0 ? R : R / 2;
-  // Scan's rows, exactly as it finds them: none, nothing drawn.
-  const float lim = 1e9f;
-  if (std::max(0, Ceil(std::max(y0, -lim) - 0.5f)) >= std::min(H, Ceil(std::min(y1, lim) - 0.5f)))
-    return true;
+  // Scan's rows: none, nothing drawn.
+  const auto [ya, yb] = Rows(y0, y1, H);
+  if (ya >= yb) return true;
   if (y1 - y0 < 8) {
     // Scan's edge crossings lie in [x0, x1] but for float rounding (a few
     // 2^-24 of |x| and of the width) and 16.16 steps (under 2^-16 a row,
