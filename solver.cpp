@@ -362,7 +362,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     // ρ/A from the patch's ρ and the element's area here rather than a
     // copy per element (24 bytes an element): the same division, so the
     // same bits. The area is the solver's copy beside B (elem_), not the
-    // 56-byte Element a cache line each.
+    // 40-byte Element a cache line each.
     if (q >= 0) {
       const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_[size_t(e)].area);
       const glm::dvec3 gain = xa * w;

@@ -22,6 +22,20 @@ double SumOverFace(const Mesh& m, const std::vector<FormFactor>& col, int face) 
   return s;
 }
 
+// Two columns the same bit for bit: the same elements, each with the same
+// form factor (compared as floats).
+::testing::AssertionResult SameColumn(const std::vector<FormFactor>& a,
+                                      const std::vector<FormFactor>& b) {
+  if (a.size() != b.size())
+    return ::testing::AssertionFailure() << a.size() << " form factors against " << b.size();
+  for (size_t k = 0; k < a.size(); ++k)
+    if (a[k].elem != b[k].elem || a[k].f != b[k].f)
+      return ::testing::AssertionFailure() << "entry " << k << ": element " << a[k].elem << " F "
+                                           << a[k].f << " against element " << b[k].elem << " F "
+                                           << b[k].f;
+  return ::testing::AssertionSuccess();
+}
+
 // Differential area to a parallel rectangle [0,a]x[0,b] at height c, with
 // the corner above the point (Howell B-3).
 double CornerParallel(double a, double b, double c) {
@@ -95,11 +109,7 @@ TEST(Hemicube, ReleasedCacheGivesTheSameColumn) {
   h.ReleaseCache();
   h.Column(m, 5, 0.3, &after);
   ASSERT_FALSE(before.empty());
-  ASSERT_EQ(before.size(), after.size());
-  for (size_t i = 0; i < before.size(); ++i) {
-    EXPECT_EQ(before[i].elem, after[i].elem);
-    EXPECT_EQ(before[i].f, after[i].f);
-  }
+  EXPECT_TRUE(SameColumn(before, after));
 }
 
 TEST(Hemicube, IndependentOfScale) {
@@ -200,11 +210,7 @@ TEST(Hemicube, CullingGivesThePlainZBuffersColumns) {
         const double angle = i % 2 ? ShotAngle(1, p, 0) : 0.0;
         culled.Column(m, p, angle, &a, &cs);
         plain.Column(m, p, angle, &b, &ps);
-        ASSERT_EQ(a.size(), b.size()) << name << " pass " << pass << " patch " << p;
-        for (size_t k = 0; k < a.size(); ++k) {
-          ASSERT_EQ(a[k].elem, b[k].elem) << name << " patch " << p;
-          ASSERT_EQ(a[k].f, b[k].f) << name << " patch " << p << " element " << a[k].elem;
-        }
+        ASSERT_TRUE(SameColumn(a, b)) << name << " pass " << pass << " patch " << p;
       }
       EXPECT_LT(cs.elements, ps.elements) << name;
       if (std::string(name) == "maze") {
@@ -263,11 +269,7 @@ TEST(Hemicube, CullingGivesThePlainZBuffersColumnsOnATessellatedScene) {
     culled.Column(m, p, angle, &a, &cs);
     plain.Column(m, p, angle, &b, &ps);
     ASSERT_FALSE(a.empty());
-    ASSERT_EQ(a.size(), b.size()) << "patch " << p;
-    for (size_t k = 0; k < a.size(); ++k) {
-      ASSERT_EQ(a[k].elem, b[k].elem) << "patch " << p;
-      ASSERT_EQ(a[k].f, b[k].f) << "patch " << p << " element " << a[k].elem;
-    }
+    ASSERT_TRUE(SameColumn(a, b)) << "patch " << p;
   }
   EXPECT_LT(cs.elements, ps.elements);
   // Most leaves are below a pixel: far fewer are covered than drawn.
