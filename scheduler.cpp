@@ -324,6 +324,25 @@ void Scheduler::Distribute() {
       more = true;
     }
   }
+  // A queue still under its low mark means nothing is left to select:
+  // every patch with power is owned. Then it takes over patches prepared
+  // and not yet sent for another worker, the last one of the longest
+  // such queue while that worker owns more than it does. Otherwise, at
+  // the start of a wave (only the lights have power), a stopped or slow
+  // worker whose queue took the lights held up the whole run until its
+  // columns came back or it was dropped (tests/parallel.sh, SIGSTOP).
+  for (Slot& s : slots_) {
+    while (s.alive && s.Queued() < size_t(s.low)) {
+      Slot* from = nullptr;
+      for (Slot& t : slots_)
+        if (&t != &s && t.alive && !t.prepared.empty() && t.Queued() > s.Queued() + 1 &&
+            (!from || t.prepared.size() > from->prepared.size()))
+          from = &t;
+      if (!from) break;
+      s.prepared.push_back(from->prepared.back());
+      from->prepared.pop_back();
+    }
+  }
   for (size_t w = 0; w < slots_.size(); ++w) {
     Slot& s = slots_[w];
     while (s.alive && !s.prepared.empty() && s.sent.size() < size_t(s.depth)) {

@@ -51,7 +51,7 @@ class FakeTransport : public Transport {
     }
     for (int i = 0; i < Workers(); ++i) {
       const int w = (next_ + i) % Workers();
-      if (lost_.count(w) || queue_[w].empty()) continue;
+      if (lost_.count(w) || silent_.count(w) || queue_[w].empty()) continue;
       next_ = w + 1;
       const proto::Assignment a = queue_[w].front();
       queue_[w].erase(queue_[w].begin());
@@ -72,6 +72,7 @@ class FakeTransport : public Transport {
   std::vector<std::pair<int, int>> log_;  // (worker, patch) in assignment order
   std::map<long, int> lose_at_;           // poll number -> worker lost then
   std::set<int> lost_;
+  std::set<int> silent_;                  // workers that never answer (SIGSTOP)
   long duplicate_at_ = -1;
   bool never_join_ = false, joined_ = false, lost_all_ = false;
   size_t max_outstanding_ = 0;
@@ -136,6 +137,31 @@ TEST(Scheduler, FillThatRunsOutStillSends) {
   o.max_seconds = 5;  // on the fake's clock: a hang ends as kLimit
   RunResult r = RunMaster(&m, o, &solver, nullptr, &t, nullptr, nullptr);
   EXPECT_EQ(r.status, RunStatus::kConverged) << r.why;
+}
+
+// Worker 0 never answers, as if stopped. The cyclic fill gives it the
+// lights of faces 0, 2 and 4, two sent and face 4's prepared; worker 1
+// gets 1, 3 and 5. Once worker 1 has shot its own, everything with power
+// is owned: it must take over face 4's light, which worker 0 was never
+// sent, instead of waiting for worker 0.
+TEST(Scheduler, AStarvingWorkerTakesOverPatchesNotYetSentToAnother) {
+  Scene s = Lights();
+  Mesh m = MakeMesh(s, OnePatchPerFace());
+  FakeTransport t(m, 2);
+  t.silent_.insert(0);
+  Solver solver(m, true);
+  RunOptions o = Opts();
+  o.queue = 6;
+  o.max_seconds = 1;  // on the fake's clock: worker 0's two never come back
+  RunMaster(&m, o, &solver, nullptr, &t, nullptr, nullptr);
+  std::vector<int> to(6, -1);  // the worker each face's patch first went to
+  for (auto [w, p] : t.log_)
+    if (to[m.patches[p].face] < 0) to[m.patches[p].face] = w;
+  EXPECT_EQ(to[0], 0);
+  EXPECT_EQ(to[2], 0);
+  EXPECT_EQ(to[4], 1);
+  EXPECT_EQ(to[1], 1);
+  for (auto [w, p] : t.log_) EXPECT_FALSE(w == 0 && m.patches[p].face == 4);
 }
 
 TEST(Scheduler, QueuesStayWithinTheHighMark) {
