@@ -44,6 +44,11 @@ bool FitsInMemory(double elements, double bytes_per_element, double usable, std:
 constexpr size_t kMappedBytes = size_t(1) << 20;
 void MapLargeArrays();
 
+// Gives the heap's free pages back to the system now (malloc_trim): glibc
+// keeps freed small blocks resident otherwise, so after many are freed a
+// process stays as large as it ever was.
+void ReturnFreeMemory();
+
 // Empties *v and gives its storage back now (clear() keeps the capacity).
 template <class V>
 void FreeStorage(V* v) {
