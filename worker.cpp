@@ -260,6 +260,10 @@ int Worker::Run(std::string* err) {
   // Nor the mesh's links back to the scene's faces, which only the
   // master's results read.
   FreeStorage(&mesh_.face_scene), FreeStorage(&mesh_.corner_begin), FreeStorage(&mesh_.face_corners);
+  // Nor, where no patches shoot together (--no-groups, or none formed), a
+  // group index per patch that is -1 for all: an empty one reads alike
+  // (GroupOf, SplitPieces) and SplitPatch does not grow it.
+  if (mesh_.groups.empty()) FreeStorage(&mesh_.group_of);
   // Its hundreds of thousands of small blocks freed go back to the system
   // (glibc keeps them otherwise), before the hemicube's arrays come.
   ReturnFreeMemory();
