@@ -62,7 +62,7 @@ $(B)/radiosity-cluster: $(B)/bench/cluster.o $(LIB_OBJS) $(SIM_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 # The master's start-up (load, join, mesh, groups) in CPU seconds.
-$(B)/radiosity-startup: $(B)/bench/startup_cpu.o $(B)/clock.o $(B)/scene.o $(B)/surface.o $(B)/mesh.o $(B)/groups.o $(B)/files.o
+$(B)/radiosity-startup: $(B)/bench/startup_cpu.o $(B)/clock.o $(B)/scene.o $(B)/surface.o $(B)/mesh.o $(B)/groups.o $(B)/files.o $(B)/memory.o
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 # Big generated scenes (rooms of boxes, tessellated shipped scenes) for

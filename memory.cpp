@@ -40,6 +40,8 @@ double UsableMemory() {
 
 void MapLargeArrays() { mallopt(M_MMAP_THRESHOLD, int(kMappedBytes)); }
 
+void ReturnFreeMemory() { malloc_trim(0); }
+
 bool FitsInMemory(double elements, double bytes_per_element, double usable, std::string* err) {
   const double need = elements * bytes_per_element;
   if (need <= usable) return true;

@@ -14,7 +14,7 @@
 
 // The master: mesh, solver, subdivision's adjacency, the hemicube (-j 0)
 // or the scene frame (with workers), the pictures at the end of a wave.
-// Measured at 1.06 M elements: 292 with -j 0 and 258 with -j 1 over 2
+// Measured at 1.06 M elements: 278 with -j 0 and 254 with -j 1 over 2
 // shots, but 456 and 462 in a first wave that divided and split 263,927
 // patches into 537,470 (its division pass: the adjacency, the solver
 // grown for the children and the pieces): the rate is that, with about
@@ -22,8 +22,9 @@
 // every element.
 constexpr double kMasterBytesPerElement = 520;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
-// (measured 189 over 2 shots; 210 to 242 once that pass's divisions and
-// splits have come, its hemicube cache rebuilt beside the adjacency).
+// (measured 176 over 2 shots, at its columns: the mesh and the hemicube
+// cache; 210 to 242 once that pass's divisions and splits have come, its
+// hemicube cache rebuilt beside the adjacency).
 constexpr double kWorkerBytesPerElement = 275;
 
 // Bytes this process may still use: physical memory, or less where
@@ -43,6 +44,11 @@ bool FitsInMemory(double elements, double bytes_per_element, double usable, std:
 // and by a worker.
 constexpr size_t kMappedBytes = size_t(1) << 20;
 void MapLargeArrays();
+
+// Gives the heap's free pages back to the system now (malloc_trim): glibc
+// keeps freed small blocks resident otherwise, so after many are freed a
+// process stays as large as it ever was.
+void ReturnFreeMemory();
 
 // Empties *v and gives its storage back now (clear() keeps the capacity).
 template <class V>

@@ -9,6 +9,7 @@
 #include "check.h"
 #include "groups.h"
 #include "hash.h"
+#include "memory.h"
 #include "point_ids.h"
 #include "surface.h"
 
@@ -244,8 +245,13 @@ bool BuildMesh(const Scene& scene, const MeshOptions& opts, Mesh* mesh,
   return BuildMesh(scene, BuildSurfaces(scene, opts.join), opts, mesh, err, read);
 }
 
-bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const MeshOptions& opts,
-               Mesh* mesh, std::string* err, const std::function<void()>& read) {
+namespace {
+
+// BuildMesh from `surfaces`; `consume`, when not null, is the same array,
+// whose surfaces are freed as they are cut.
+bool Build(const Scene& scene, const std::vector<Surface>& surfaces,
+           std::vector<Surface>* consume, const MeshOptions& opts, Mesh* mesh, std::string* err,
+           const std::function<void()>& read) {
   *mesh = Mesh();
   mesh->scene_diagonal = glm::length(scene.hi - scene.lo);
   mesh->patch_size = opts.patch_size > 0 ? opts.patch_size : mesh->scene_diagonal / 16;
@@ -292,7 +298,12 @@ bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const M
   for (const Material& mat : scene.materials) mesh->materials.push_back({mat.kd, mat.ke});
   PointIds fv(&mesh->verts);
   Builder b(mesh, epp, &fv);
-  for (const Surface& f : surfaces) {
+  // Freed bytes not yet given back: a trim walks the whole heap, so it
+  // is done every few megabytes, not per surface.
+  constexpr size_t kReturnEvery = size_t(8) << 20;
+  size_t freed = 0;
+  for (size_t s = 0; s < surfaces.size(); ++s) {
+    const Surface& f = surfaces[s];
     MeshFace mf;
     mf.scene_at = int32_t(mesh->face_scene.size());
     mf.scenes = int32_t(f.faces.size());
@@ -328,6 +339,15 @@ bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const M
     }
     b.Finish();
     mesh->faces[face].vend = int(mesh->verts.size());
+    if (consume) {
+      Surface& done = (*consume)[s];
+      freed += done.poly.capacity() * sizeof(done.poly[0]) + done.faces.capacity() * sizeof(int);
+      FreeStorage(&done.poly), FreeStorage(&done.faces);
+      if (freed >= kReturnEvery) {
+        ReturnFreeMemory();
+        freed = 0;
+      }
+    }
   }
 
   for (size_t i = 0; i < mesh->patches.size(); ++i) {
@@ -342,6 +362,18 @@ bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const M
   }
   FormGroups(opts, mesh);
   return true;
+}
+
+}  // namespace
+
+bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const MeshOptions& opts,
+               Mesh* mesh, std::string* err, const std::function<void()>& read) {
+  return Build(scene, surfaces, nullptr, opts, mesh, err, read);
+}
+
+bool BuildMesh(const Scene& scene, std::vector<Surface>&& surfaces, const MeshOptions& opts,
+               Mesh* mesh, std::string* err, const std::function<void()>& read) {
+  return Build(scene, surfaces, &surfaces, opts, mesh, err, read);
 }
 
 namespace {

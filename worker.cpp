@@ -1,7 +1,5 @@
 #include "worker.h"
 
-#include <malloc.h>
-
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -241,16 +239,18 @@ int Worker::Run(std::string* err) {
   // is built beside the scene, the worker's peak.
   std::string().swap(payload);
   {
-    // Joined once for the estimate and the mesh, and let go once meshed.
-    const std::vector<Surface> surfaces = BuildSurfaces(setup.scene, setup.mesh.join);
+    // Joined once for the estimate and the mesh, and freed surface by
+    // surface as BuildMesh cuts them (their polygons and faces, about 27
+    // bytes an element, stood beside the whole mesh: the worker's peak).
+    std::vector<Surface> surfaces = BuildSurfaces(setup.scene, setup.mesh.join);
     if (!FitsInMemory(EstimateMesh(setup.scene, surfaces, setup.mesh).elements,
                       kWorkerBytesPerElement, UsableMemory(), &why) ||
-        !BuildMesh(setup.scene, surfaces, setup.mesh, &mesh_, &why, [&setup] {
+        !BuildMesh(setup.scene, std::move(surfaces), setup.mesh, &mesh_, &why, [&setup] {
           // The faces with their vertices (some 65 bytes an element, in as
           // many blocks as faces) go back to the system before the elements
           // are made: from here BuildMesh reads only the materials.
           FreeStorage(&setup.scene.faces);
-          malloc_trim(0);
+          ReturnFreeMemory();
         }))
       return Fail(why, err);
   }
@@ -260,9 +260,13 @@ int Worker::Run(std::string* err) {
   // Nor the mesh's links back to the scene's faces, which only the
   // master's results read.
   FreeStorage(&mesh_.face_scene), FreeStorage(&mesh_.corner_begin), FreeStorage(&mesh_.face_corners);
+  // Nor, where no patches shoot together (--no-groups, or none formed), a
+  // group index per patch that is -1 for all: an empty one reads alike
+  // (GroupOf, SplitPieces) and SplitPatch does not grow it.
+  if (mesh_.groups.empty()) FreeStorage(&mesh_.group_of);
   // Its hundreds of thousands of small blocks freed go back to the system
   // (glibc keeps them otherwise), before the hemicube's arrays come.
-  malloc_trim(0);
+  ReturnFreeMemory();
   frame.clear();
   proto::EncodeReady({mesh_.elems.size(), MeshHash(mesh_)}, &frame);
   setup_heartbeat.reset();

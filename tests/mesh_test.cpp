@@ -172,6 +172,31 @@ TEST(Mesh, VerticesFreedAtTheReadHookChangeNothing) {
   EXPECT_GT(corners, 0u);  // some faces joined into surfaces
 }
 
+// Surfaces consumed as they are cut (the worker's BuildMesh): the same
+// mesh, links to the scene's faces included, and every surface's polygon
+// and faces freed.
+TEST(Mesh, SurfacesConsumedAsCutChangeNothing) {
+  for (const char* name : {"cornell", "cornell-holes", "room", "maze", "blender"}) {
+    Scene scene;
+    std::string err;
+    std::vector<std::string> warnings;
+    ASSERT_TRUE(LoadScene(ShippedScenePath(name), &scene, &err, &warnings)) << err;
+    const std::vector<Surface> surfaces = BuildSurfaces(scene, true);
+    Mesh want, got;
+    ASSERT_TRUE(BuildMesh(scene, surfaces, MeshOptions(), &want, &err)) << err;
+    std::vector<Surface> consumed = surfaces;
+    ASSERT_TRUE(BuildMesh(scene, std::move(consumed), MeshOptions(), &got, &err)) << err;
+    EXPECT_EQ(MeshHash(got), MeshHash(want)) << name;
+    EXPECT_EQ(got.face_scene, want.face_scene) << name;
+    EXPECT_EQ(got.face_corners, want.face_corners) << name;
+    ASSERT_EQ(consumed.size(), surfaces.size()) << name;
+    for (const Surface& s : consumed) {
+      EXPECT_EQ(s.poly.capacity(), 0u) << name;
+      EXPECT_EQ(s.faces.capacity(), 0u) << name;
+    }
+  }
+}
+
 // Joining sizes the weld table once for every corner: the same ids as a
 // table grown point by point, the first point seen getting the next id.
 TEST(Mesh, PointIdsReservedWeldAsGrown) {
