@@ -1,7 +1,6 @@
 #include "app.h"
 
 #include <fcntl.h>
-#include <malloc.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -220,7 +219,7 @@ void MasterRun::Build() {
   built_ = mesh_.LeafCount();
   StartWorkers();
   DropVertices(&scene_);  // hashed, sent and meshed: 120 bytes a face freed
-  malloc_trim(0);         // and given back to the system (glibc would keep them)
+  ReturnFreeMemory();     // and given back to the system (glibc would keep them)
   solver_ = std::make_unique<Solver>(mesh_, run_.overshoot);
   // Progress: a line redrawn in place on a terminal, else a line every 2 s
   // (a log file or a batch system's output should not fill with \r).
