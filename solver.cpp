@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 #include "check.h"
 #include "groups.h"
@@ -344,61 +345,79 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   // Room for every patch and, should a sum stay 0, every form factor.
   if (touched_.size() < patch_.size() + n) touched_.resize(patch_.size() + n);
   int32_t* const touched = touched_.data();
-  size_t reached = 0;
-  // Its patch's record (ρ, Σ F: one line) is fetched kAhead early too,
-  // from its patch id fetched 2 kAhead early.
-  for (size_t i = 0; i < n; ++i) {
-    if (i + 2 * kAhead < n) __builtin_prefetch(&patch_of_[size_t(col[i + 2 * kAhead].elem)]);
-    if (i + kAhead < n) {
-      const int32_t a = col[i + kAhead].elem;
-      __builtin_prefetch(&elem_[size_t(a)], 1);
-      const int32_t qa = patch_of_[size_t(a)];
-      if (qa >= 0) __builtin_prefetch(&patch_[size_t(qa)], 1);
-      if (noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
-    }
-    const int32_t e = col[i].elem;
-    int32_t q = patch_of_[e];
-    const double f = double(col[i].f);
-    // ρ/A from the patch's ρ and the element's area here rather than a
-    // copy per element (24 bytes an element): the same division, so the
-    // same bits. The area is the solver's copy beside B (elem_), not the
-    // 40-byte Element a cache line each.
-    if (q >= 0) {
-      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_[size_t(e)].area);
-      const glm::dvec3 gain = xa * w;
-      elem_[e].b += gain;
-      if (direct) direct_[e] += float(Lum(ka * w));
-      if (noisy) noise_[e] += ShotNoise(Lum(gain), f, pixel(q));
-      if (track_) Changed(e);
-    } else {  // divided since the column was computed: each leaf gains alike
-      q = ~q;
-      mesh_.LeavesUnder(e, &leaves_);
-      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_[size_t(e)].area);
-      const glm::dvec3 gain = xa * w;
-      const double var = noisy ? ShotNoise(Lum(gain), f, pixel(q)) : 0;
-      const float first = direct ? float(Lum(ka * w)) : 0.0f;
-      bool one_patch = true;
-      for (int l : leaves_) {
-        elem_[l].b += gain;
-        if (direct) direct_[l] += first;
-        if (noisy) noise_[l] += var;
-        if (track_) Changed(l);
-        one_patch &= patch_of_[size_t(l)] == q;
+  // The arrays as local pointers: as members they were loaded again at
+  // every element (a store through one of them might, for all the compiler
+  // knows, have changed another).
+  ElemShot* const elem = elem_.data();
+  PatchShot* const patch = patch_.data();
+  const int32_t* const patch_of = patch_of_.data();
+  // The loop over the column, once without what only subdivision needs
+  // (noise, first light, the changed list: off unless the run divides) and
+  // once with it, so that the common loop tests none of it per element.
+  // The same operations on B and Σ F in the same order either way.
+  auto elements = [&](auto extras) {
+    constexpr bool kExtras = decltype(extras)::value;
+    size_t reached = 0;
+    // Its patch's record (ρ, Σ F: one line) is fetched kAhead early too,
+    // from its patch id fetched 2 kAhead early.
+    for (size_t i = 0; i < n; ++i) {
+      if (i + 2 * kAhead < n) __builtin_prefetch(&patch_of[size_t(col[i + 2 * kAhead].elem)]);
+      if (i + kAhead < n) {
+        const int32_t a = col[i + kAhead].elem;
+        __builtin_prefetch(&elem[size_t(a)], 1);
+        const int32_t qa = patch_of[size_t(a)];
+        if (qa >= 0) __builtin_prefetch(&patch[size_t(qa)], 1);
+        if (kExtras && noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
       }
-      if (!one_patch) {  // and split since: each piece reflects its leaves' share
-        for (int l : leaves_) {
-          const int32_t r = patch_of_[size_t(l)];
-          touched[reached] = r;
-          reached += patch_[r].fsum == 0;
-          patch_[r].fsum += f * (elem_[size_t(l)].area / elem_[size_t(e)].area);
+      const int32_t e = col[i].elem;
+      int32_t q = patch_of[e];
+      const double f = double(col[i].f);
+      // ρ/A from the patch's ρ and the element's area here rather than a
+      // copy per element (24 bytes an element): the same division, so the
+      // same bits. The area is the solver's copy beside B (elem_), not the
+      // 40-byte Element a cache line each.
+      if (q >= 0) {
+        const glm::dvec3 w = f * Over(patch[size_t(q)].rho, elem[size_t(e)].area);
+        const glm::dvec3 gain = xa * w;
+        elem[e].b += gain;
+        if (kExtras) {
+          if (direct) direct_[e] += float(Lum(ka * w));
+          if (noisy) noise_[e] += ShotNoise(Lum(gain), f, pixel(q));
+          if (track_) Changed(e);
         }
-        continue;
+      } else {  // divided since the column was computed: each leaf gains alike
+        q = ~q;
+        mesh_.LeavesUnder(e, &leaves_);
+        const glm::dvec3 w = f * Over(patch[size_t(q)].rho, elem[size_t(e)].area);
+        const glm::dvec3 gain = xa * w;
+        const double var = noisy ? ShotNoise(Lum(gain), f, pixel(q)) : 0;
+        const float first = direct ? float(Lum(ka * w)) : 0.0f;
+        bool one_patch = true;
+        for (int l : leaves_) {
+          elem[l].b += gain;
+          if (direct) direct_[l] += first;
+          if (noisy) noise_[l] += var;
+          if (track_) Changed(l);
+          one_patch &= patch_of[size_t(l)] == q;
+        }
+        if (!one_patch) {  // and split since: each piece reflects its leaves' share
+          for (int l : leaves_) {
+            const int32_t r = patch_of[size_t(l)];
+            touched[reached] = r;
+            reached += patch[r].fsum == 0;
+            patch[r].fsum += f * (elem[size_t(l)].area / elem[size_t(e)].area);
+          }
+          continue;
+        }
       }
+      touched[reached] = q;
+      reached += patch[q].fsum == 0;
+      patch[q].fsum += f;
     }
-    touched[reached] = q;
-    reached += patch_[q].fsum == 0;
-    patch_[q].fsum += f;
-  }
+    return reached;
+  };
+  const size_t reached = noisy || direct || track_ ? elements(std::true_type())
+                                                   : elements(std::false_type());
   queue_.Expect(reached + 1);
   // The running sums in locals: as members, every patch's byte stores
   // (lit_) and the queue's calls made them a load and a store each, a
