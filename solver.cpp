@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 #include "check.h"
 #include "groups.h"
@@ -53,7 +54,7 @@ inline double ShotNoise(double g, double f, double df) {
 }  // namespace
 
 Solver::Solver(const Mesh& mesh, bool overshoot)
-    : mesh_(mesh), overshoot_(overshoot), blind_(mesh.patches.size(), 0) {
+    : mesh_(mesh), overshoot_(overshoot) {
   PatchArrays();
   glm::dvec3 rho_area(0.0);
   for (size_t p = 0; p < mesh.patches.size(); ++p) {
@@ -83,8 +84,10 @@ void Solver::PatchArrays() {
   weight_.resize(n);
   if (!pixel_df_.empty()) pixel_df_.resize(n);  // noise tracked: per patch too
   for (size_t p = 0; p < n; ++p) {
-    const glm::dvec3& rho = mesh_.Rho(mesh_.faces[mesh_.patches[p].face]);
-    patch_[p].rho = rho;
+    const MeshFace& face = mesh_.faces[mesh_.patches[p].face];
+    const glm::dvec3& rho = mesh_.Rho(face);
+    patch_[p].material = face.material;
+    patch_[p].group = mesh_.group_of.empty() ? -1 : mesh_.group_of[p];
     patch_[p].area = mesh_.patches[p].area;
     patch_[p].fsum = 0;
     center_[p] = mesh_.patches[p].center;
@@ -106,10 +109,9 @@ void Solver::NewWave() {
   if (pixel_ff_ > 0) noise_.assign(elem_.size(), 0.0);
   if (track_direct_) direct_.assign(elem_.size(), 0.0f);
   patch_.resize(mesh_.patches.size());
-  lit_.resize(mesh_.patches.size());
   for (size_t p = 0; p < patch_.size(); ++p) {
     patch_[p].unshot = mesh_.Emission(mesh_.faces[mesh_.patches[p].face]);
-    lit_[p] = Abs(patch_[p].unshot) > 0;
+    patch_[p].lit = Abs(patch_[p].unshot) > 0;
   }
   times_shot_.assign(mesh_.patches.size(), 0);
   CountDarkEmitters();
@@ -122,7 +124,7 @@ void Solver::NewWave() {
 void Solver::CountDarkEmitters() {
   dark_emitters_ = 0;
   for (size_t p = 0; p < patch_.size(); ++p) {
-    if (blind_[p] || times_shot_[p] > 0 || !IsShooter(mesh_, int(p))) continue;
+    if (patch_[p].blind || times_shot_[p] > 0 || !IsShooter(mesh_, int(p))) continue;
     const int32_t shooter = int32_t(p);
     double ke = 0;
     for (int32_t m : ShootsAs(mesh_, shooter)) ke += Abs(mesh_.Emission(mesh_.faces[mesh_.patches[size_t(m)].face]));
@@ -197,12 +199,12 @@ glm::dvec3 Solver::Ambient() const {
 // overshot: the ambient estimate is light expected to arrive, and there
 // it will not, so shooting it would only have to be taken back later.
 glm::dvec3 Solver::ToShoot(int p) const {
-  if (!overshoot_ || !lit_[p]) return patch_[p].unshot;
-  return patch_[p].unshot + patch_[p].rho * Ambient();
+  if (!overshoot_ || !patch_[p].lit) return patch_[p].unshot;
+  return patch_[p].unshot + Rho(p) * Ambient();
 }
 
 double Solver::Power(int p, const glm::dvec3& ambient) const {
-  const glm::dvec3 x = lit_[p] ? patch_[p].unshot + patch_[p].rho * ambient : patch_[p].unshot;
+  const glm::dvec3 x = patch_[p].lit ? patch_[p].unshot + Rho(p) * ambient : patch_[p].unshot;
   return Abs(x) * patch_[p].area;
 }
 
@@ -220,7 +222,7 @@ int Solver::SelectByScan(const std::vector<char>* taken) const {
   int best = -1;
   double best_power = 0;
   for (size_t p = 0; p < patch_.size(); ++p) {
-    if ((taken && (*taken)[p]) || blind_[p] || !IsShooter(mesh_, int(p))) continue;
+    if ((taken && (*taken)[p]) || patch_[p].blind || !IsShooter(mesh_, int(p))) continue;
     const double power = ShooterPower(int(p), amb);
     if (power > best_power) {
       best_power = power;
@@ -238,8 +240,8 @@ int Solver::SelectByScan(const std::vector<char>* taken) const {
 // (weight = area · max ρ): the drift Select adds to every bound, times
 // each patch's weight.
 inline double Solver::PatchBound(int p) const {  // inline: Shoot's touched loop calls it
-  if (!overshoot_ || !lit_[p]) return Abs(patch_[p].unshot) * patch_[p].area;
-  const glm::dvec3 shared = patch_[p].rho * base_;
+  if (!overshoot_ || !patch_[p].lit) return Abs(patch_[p].unshot) * patch_[p].area;
+  const glm::dvec3 shared = Rho(p) * base_;
   return (Abs(patch_[p].unshot + shared) + 1e-9 * (Abs(patch_[p].unshot) + Abs(shared))) * patch_[p].area;
 }
 
@@ -249,7 +251,7 @@ inline double Solver::PatchBound(int p) const {  // inline: Shoot's touched loop
 // -inf for the other members and the blind. A group's members go blind
 // together (Shoot).
 double Solver::Bound(int p) const {
-  if (blind_[p] || !IsShooter(mesh_, p)) return -HUGE_VAL;
+  if (patch_[p].blind || !IsShooter(mesh_, p)) return -HUGE_VAL;
   const PatchGroup* g = GroupOf(mesh_, p);
   if (!g) return PatchBound(p);
   double bound = 0;
@@ -298,7 +300,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     // A shooter that sees no element sends its light out of the scene:
     // its unshot radiosity is spent, and it is never chosen again (nothing
     // can send it light either, by reciprocity).
-    if (column.empty()) blind_[m] = 1;
+    if (column.empty()) patch_[m].blind = 1;
     const glm::dvec3 x = column.empty() ? patch_[m].unshot : ToShoot(m);
     abs_sum_ -= Abs(patch_[m].unshot) * patch_[m].area;
     patch_[m].unshot -= x;
@@ -344,64 +346,83 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   // Room for every patch and, should a sum stay 0, every form factor.
   if (touched_.size() < patch_.size() + n) touched_.resize(patch_.size() + n);
   int32_t* const touched = touched_.data();
-  size_t reached = 0;
-  // Its patch's record (ρ, Σ F: one line) is fetched kAhead early too,
-  // from its patch id fetched 2 kAhead early.
-  for (size_t i = 0; i < n; ++i) {
-    if (i + 2 * kAhead < n) __builtin_prefetch(&patch_of_[size_t(col[i + 2 * kAhead].elem)]);
-    if (i + kAhead < n) {
-      const int32_t a = col[i + kAhead].elem;
-      __builtin_prefetch(&elem_[size_t(a)], 1);
-      const int32_t qa = patch_of_[size_t(a)];
-      if (qa >= 0) __builtin_prefetch(&patch_[size_t(qa)], 1);
-      if (noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
-    }
-    const int32_t e = col[i].elem;
-    int32_t q = patch_of_[e];
-    const double f = double(col[i].f);
-    // ρ/A from the patch's ρ and the element's area here rather than a
-    // copy per element (24 bytes an element): the same division, so the
-    // same bits. The area is the solver's copy beside B (elem_), not the
-    // 40-byte Element a cache line each.
-    if (q >= 0) {
-      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_[size_t(e)].area);
-      const glm::dvec3 gain = xa * w;
-      elem_[e].b += gain;
-      if (direct) direct_[e] += float(Lum(ka * w));
-      if (noisy) noise_[e] += ShotNoise(Lum(gain), f, pixel(q));
-      if (track_) Changed(e);
-    } else {  // divided since the column was computed: each leaf gains alike
-      q = ~q;
-      mesh_.LeavesUnder(e, &leaves_);
-      const glm::dvec3 w = f * Over(patch_[size_t(q)].rho, elem_[size_t(e)].area);
-      const glm::dvec3 gain = xa * w;
-      const double var = noisy ? ShotNoise(Lum(gain), f, pixel(q)) : 0;
-      const float first = direct ? float(Lum(ka * w)) : 0.0f;
-      bool one_patch = true;
-      for (int l : leaves_) {
-        elem_[l].b += gain;
-        if (direct) direct_[l] += first;
-        if (noisy) noise_[l] += var;
-        if (track_) Changed(l);
-        one_patch &= patch_of_[size_t(l)] == q;
+  // The arrays as local pointers: as members they were loaded again at
+  // every element (a store through one of them might, for all the compiler
+  // knows, have changed another).
+  ElemShot* const elem = elem_.data();
+  PatchShot* const patch = patch_.data();
+  const int32_t* const patch_of = patch_of_.data();
+  const Mesh::Material* const mats = mesh_.materials.data();
+  // The loop over the column, once without what only subdivision needs
+  // (noise, first light, the changed list: off unless the run divides) and
+  // once with it, so that the common loop tests none of it per element.
+  // The same operations on B and Σ F in the same order either way.
+  auto elements = [&](auto extras) {
+    constexpr bool kExtras = decltype(extras)::value;
+    size_t reached = 0;
+    // Its patch's record (ρ, Σ F: one line) is fetched kAhead early too,
+    // from its patch id fetched 2 kAhead early.
+    for (size_t i = 0; i < n; ++i) {
+      if (i + 2 * kAhead < n) __builtin_prefetch(&patch_of[size_t(col[i + 2 * kAhead].elem)]);
+      if (i + kAhead < n) {
+        const int32_t a = col[i + kAhead].elem;
+        __builtin_prefetch(&elem[size_t(a)], 1);
+        const int32_t qa = patch_of[size_t(a)];
+        if (qa >= 0) __builtin_prefetch(&patch[size_t(qa)], 1);
+        if (kExtras && noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
       }
-      if (!one_patch) {  // and split since: each piece reflects its leaves' share
-        for (int l : leaves_) {
-          const int32_t r = patch_of_[size_t(l)];
-          touched[reached] = r;
-          reached += patch_[r].fsum == 0;
-          patch_[r].fsum += f * (elem_[size_t(l)].area / elem_[size_t(e)].area);
+      const int32_t e = col[i].elem;
+      int32_t q = patch_of[e];
+      const double f = double(col[i].f);
+      // ρ/A from the patch's ρ and the element's area here rather than a
+      // copy per element (24 bytes an element): the same division, so the
+      // same bits. The area is the solver's copy beside B (elem_), not the
+      // 40-byte Element a cache line each.
+      if (q >= 0) {
+        const glm::dvec3 w = f * Over(mats[patch[size_t(q)].material].rho, elem[size_t(e)].area);
+        const glm::dvec3 gain = xa * w;
+        elem[e].b += gain;
+        if (kExtras) {
+          if (direct) direct_[e] += float(Lum(ka * w));
+          if (noisy) noise_[e] += ShotNoise(Lum(gain), f, pixel(q));
+          if (track_) Changed(e);
         }
-        continue;
+      } else {  // divided since the column was computed: each leaf gains alike
+        q = ~q;
+        mesh_.LeavesUnder(e, &leaves_);
+        const glm::dvec3 w = f * Over(mats[patch[size_t(q)].material].rho, elem[size_t(e)].area);
+        const glm::dvec3 gain = xa * w;
+        const double var = noisy ? ShotNoise(Lum(gain), f, pixel(q)) : 0;
+        const float first = direct ? float(Lum(ka * w)) : 0.0f;
+        bool one_patch = true;
+        for (int l : leaves_) {
+          elem[l].b += gain;
+          if (direct) direct_[l] += first;
+          if (noisy) noise_[l] += var;
+          if (track_) Changed(l);
+          one_patch &= patch_of[size_t(l)] == q;
+        }
+        if (!one_patch) {  // and split since: each piece reflects its leaves' share
+          for (int l : leaves_) {
+            const int32_t r = patch_of[size_t(l)];
+            touched[reached] = r;
+            reached += patch[r].fsum == 0;
+            patch[r].fsum += f * (elem[size_t(l)].area / elem[size_t(e)].area);
+          }
+          continue;
+        }
       }
+      touched[reached] = q;
+      reached += patch[q].fsum == 0;
+      patch[q].fsum += f;
     }
-    touched[reached] = q;
-    reached += patch_[q].fsum == 0;
-    patch_[q].fsum += f;
-  }
+    return reached;
+  };
+  const size_t reached = noisy || direct || track_ ? elements(std::true_type())
+                                                   : elements(std::false_type());
   queue_.Expect(reached + 1);
   // The running sums in locals: as members, every patch's byte stores
-  // (lit_) and the queue's calls made them a load and a store each, a
+  // (the lit flag) and the queue's calls made them a load and a store each, a
   // chain of store-to-load waits through the loop. The same operations
   // in the same order: the same bits.
   double abs_sum = abs_sum_;
@@ -410,22 +431,19 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     if (i + kAhead < reached) {
       const size_t a = size_t(touched[i + kAhead]);
       __builtin_prefetch(&patch_[a], 1);
-      __builtin_prefetch(&lit_[a], 1);
-      __builtin_prefetch(&blind_[a]);
-      if (!mesh_.group_of.empty()) __builtin_prefetch(&mesh_.group_of[a]);
       queue_.Prefetch(int(a));
     }
     const int32_t q = touched[i];
-    const glm::dvec3 reflected = patch_[q].rho * xa * patch_[q].fsum;
+    const glm::dvec3 reflected = mats[patch_[q].material].rho * xa * patch_[q].fsum;
     patch_[q].fsum = 0;
-    lit_[q] |= Abs(reflected) > 0;
-    if (blind_[q]) continue;  // a hemicube speck: it could not pass it on
+    patch_[q].lit |= Abs(reflected) > 0;
+    if (patch_[q].blind) continue;  // a hemicube speck: it could not pass it on
     abs_sum -= Abs(patch_[q].unshot) * patch_[q].area;
     patch_[q].unshot += Over(reflected, patch_[q].area);
     abs_sum += Abs(patch_[q].unshot) * patch_[q].area;
     unshot_sum += reflected;
     // Light reaching a group's member moves its group's key, once a shot.
-    const int32_t g = mesh_.group_of.empty() ? -1 : mesh_.group_of[size_t(q)];
+    const int32_t g = patch_[q].group;
     if (g < 0) {  // a shooter alone and not blind: its bound is its own
       queue_.Set(q, PatchBound(q));
     } else if (!group_dirty_[size_t(g)]) {
@@ -539,8 +557,8 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
 void Solver::Split(int p) {
   const size_t from = patch_.size(), n = mesh_.patches.size();
   const double whole = patch_[size_t(p)].area;
-  const glm::dvec3 power = patch_[size_t(p)].unshot * whole, rho = patch_[size_t(p)].rho;
-  const uint8_t lit = lit_[size_t(p)], blind = blind_[size_t(p)];
+  const glm::dvec3 power = patch_[size_t(p)].unshot * whole;
+  const PatchShot piece = patch_[size_t(p)];  // what every piece inherits: ρ, the flags
   std::vector<int> pieces{p};
   for (size_t q = from; q < n; ++q) pieces.push_back(int(q));
   const MeshFace& face = mesh_.faces[size_t(mesh_.patches[size_t(p)].face)];
@@ -549,15 +567,18 @@ void Solver::Split(int p) {
   // once rather than doubled split by split.
   if (mesh_.patches.capacity() > patch_.capacity()) {
     const size_t room = mesh_.patches.capacity();
-    patch_.reserve(room), weight_.reserve(room), lit_.reserve(room), blind_.reserve(room);
+    patch_.reserve(room), weight_.reserve(room);
     times_shot_.reserve(room), center_.reserve(room);
     if (!pixel_df_.empty()) pixel_df_.reserve(room);
   }
   patch_.resize(n);
-  for (size_t q = from; q < n; ++q) patch_[q].rho = rho;
+  for (size_t q = from; q < n; ++q) {
+    patch_[q].material = piece.material;
+    patch_[q].group = -1;  // a grouped patch is never split (split.cpp)
+    patch_[q].lit = piece.lit;
+    patch_[q].blind = piece.blind;
+  }
   weight_.resize(n);
-  lit_.resize(n, lit);
-  blind_.resize(n, blind);
   times_shot_.resize(n, 0);
   center_.resize(n);
   if (!pixel_df_.empty()) pixel_df_.resize(n);  // noise tracked
@@ -610,7 +631,7 @@ void Solver::SplitsDone() {
 std::vector<glm::dvec3> Solver::TakeRadiosity() {
   FreeStorage(&patch_of_), FreeStorage(&patch_), FreeStorage(&center_), FreeStorage(&touched_);
   FreeStorage(&is_changed_), FreeStorage(&noise_), FreeStorage(&pixel_df_), FreeStorage(&direct_);
-  FreeStorage(&changed_), FreeStorage(&lit_), FreeStorage(&blind_), FreeStorage(&times_shot_);
+  FreeStorage(&changed_), FreeStorage(&times_shot_);
   FreeStorage(&weight_), FreeStorage(&group_dirty_), FreeStorage(&dirty_groups_), FreeStorage(&leaves_);
   queue_ = ShooterQueue();
   std::vector<glm::dvec3> b = radiosity();
@@ -622,8 +643,12 @@ SolverState Solver::State() const {
   SolverState s;
   s.b = radiosity();
   s.unshot = unshot();
-  s.lit = lit_;
-  s.blind = blind_;
+  s.lit.resize(patch_.size());
+  s.blind.resize(patch_.size());
+  for (size_t p = 0; p < patch_.size(); ++p) {
+    s.lit[p] = patch_[p].lit;
+    s.blind[p] = patch_[p].blind;
+  }
   s.times_shot.assign(times_shot_.begin(), times_shot_.end());
   s.noise = noise_;
   s.direct = direct_;
@@ -650,9 +675,11 @@ bool Solver::Restore(const SolverState& s, std::string* err) {
   Grow();
   PatchArrays();
   for (size_t e = 0; e < elem_.size(); ++e) elem_[e].b = s.b[e];
-  for (size_t p = 0; p < np; ++p) patch_[p].unshot = s.unshot[p];
-  lit_ = s.lit;
-  blind_ = s.blind;
+  for (size_t p = 0; p < np; ++p) {
+    patch_[p].unshot = s.unshot[p];
+    patch_[p].lit = s.lit[p];
+    patch_[p].blind = s.blind[p];
+  }
   times_shot_.assign(s.times_shot.begin(), s.times_shot.end());
   noise_ = s.noise;
   direct_ = s.direct;

@@ -151,6 +151,7 @@ class Solver {
   bool Restore(const SolverState& s, std::string* err);
 
  private:
+  const glm::dvec3& Rho(int p) const { return mesh_.materials[size_t(patch_[size_t(p)].material)].rho; }
   glm::dvec3 ToShoot(int p) const;
   double Power(int p, const glm::dvec3& ambient) const;  // one patch's
   double ShooterPower(int p, const glm::dvec3& ambient) const;
@@ -186,12 +187,17 @@ class Solver {
   // Per patch, what Shoot reads and writes of each patch a column reaches,
   // in one cache line: at 10^5 patches and more the patches a shot
   // reaches are scattered over arrays larger than the caches, and each
-  // array was a line to wait for.
+  // array was a line to wait for. ρ by its material (Rho(p): the
+  // materials are few and stay in the caches), so that the flags and the
+  // group fit beside the rest.
   struct alignas(64) PatchShot {
     glm::dvec3 unshot{0.0};
-    glm::dvec3 rho{0.0};  // its face's
     double area = 0;
-    double fsum = 0;      // Σ F within one Shoot
+    double fsum = 0;        // Σ F within one Shoot
+    int32_t material = 0;   // its face's, in mesh_.materials
+    int32_t group = -1;     // mesh_.group_of's (-1: none)
+    uint8_t lit = 0;        // emits, or light reached it
+    uint8_t blind = 0;      // its column was empty
   };
   static_assert(sizeof(PatchShot) == 64, "one cache line");
   std::vector<PatchShot, HugePageAllocator<PatchShot>> patch_;
@@ -206,8 +212,6 @@ class Solver {
   long dark_emitters_ = 0;          // emitting shooters not yet shot in this wave
   std::vector<int32_t> changed_;    // elements whose B changed, for TakeChanged
   bool track_ = false;              // since TakeChanged was first called
-  std::vector<uint8_t> lit_;        // per patch: emits, or light reached it
-  std::vector<uint8_t> blind_;      // per patch: its column was empty
   std::vector<int> times_shot_;
   glm::dvec3 unshot_sum_{0.0};      // Σ unshot·area, kept incrementally
   double abs_sum_ = 0;              // Σ |unshot|·area (channels summed), too

@@ -1,6 +1,7 @@
 // radiosity-master: the master's own work per shot on one scene, as one
 // table row on stdout (bench/master.sh adds the headers).
 //   radiosity-master SCENE.obj SHOTS [R] [--no-overshoot] [--divide [--every-leaf]]
+//                    [--rounds N] [--thread-cpu]
 // Each shot as the master does it with workers: select the next patch,
 // decode the column that comes back (the frame a worker sends, made here
 // by ShotColumn and EncodeColumn, which are not timed: a worker's work),
@@ -9,6 +10,10 @@
 // column). --divide: a division pass every 10 shots after the first 20
 // (without waves), timed per pass, with the share of the leaves it
 // evaluated; --every-leaf: every leaf every pass, as before issue 14.
+// --rounds N: N replays instead of 3, the quickest kept; --thread-cpu:
+// each part timed on the thread's CPU clock (a system call, about half a
+// microsecond a read, four a shot) rather than the wall clock scaled to
+// the round's CPU time: steadier on a machine shared with other work.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -28,14 +33,18 @@
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: radiosity-master SCENE.obj SHOTS [R] [--no-overshoot] [--divide]\n");
+    std::fprintf(stderr,
+                 "usage: radiosity-master SCENE.obj SHOTS [R] [--no-overshoot] [--divide "
+                 "[--every-leaf]] [--rounds N] [--thread-cpu]\n");
     return 2;
   }
   const long shots = std::atol(argv[2]);
-  int res = 256;
-  bool overshoot = true, divide = false, every_leaf = false;
+  int res = 256, rounds = 3;
+  bool overshoot = true, divide = false, every_leaf = false, thread_cpu = false;
   for (int i = 3; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--no-overshoot")) overshoot = false;
+    else if (!std::strcmp(argv[i], "--thread-cpu")) thread_cpu = true;
+    else if (!std::strcmp(argv[i], "--rounds") && i + 1 < argc) rounds = std::max(1, std::atoi(argv[++i]));
     else if (!std::strcmp(argv[i], "--divide")) divide = true;
     else if (!std::strcmp(argv[i], "--every-leaf")) every_leaf = true;
     else res = std::atoi(argv[i]);
@@ -75,7 +84,8 @@ int main(int argc, char** argv) {
   double select_s = HUGE_VAL / 4, decode_s = 0, shoot_s = 0, pass_s = 0, pass_max = 0, policy_s = 0;
   long covered = 0, done = 0, passes = 0, divided = 0, evaluated = 0, leaves = 0;
   std::vector<int32_t> changed;
-  for (int round = 0; round < (divide ? 1 : 3); ++round) {
+  const auto clock = thread_cpu ? ThreadCpuSeconds : MonotonicSeconds;
+  for (int round = 0; round < (divide ? 1 : rounds); ++round) {
     Solver solver(mesh, overshoot);
     if (divide) solver.TrackNoise(res);  // as the run loop does when it divides
     SubdivideOptions so;
@@ -89,10 +99,10 @@ int main(int argc, char** argv) {
     covered = 0;
     const double cpu0 = ThreadCpuSeconds(), wall0 = MonotonicSeconds();
     for (done = 0; done < long(frames.size()); ++done) {
-      double t0 = MonotonicSeconds();
+      double t0 = clock();
       const int p = solver.Select();
       solver.Take(p);
-      const double t1 = MonotonicSeconds();
+      const double t1 = clock();
       reader.Append(frames[size_t(done)].data(), frames[size_t(done)].size());
       proto::Msg type;
       if (reader.Next(&type, &payload, &err) != proto::FrameReader::kFrame ||
@@ -101,10 +111,10 @@ int main(int argc, char** argv) {
                      got.patch);
         return 1;
       }
-      const double t2 = MonotonicSeconds();
+      const double t2 = clock();
       solver.Shoot(p, got.ff);
       solver.Release(p);
-      const double t3 = MonotonicSeconds();
+      const double t3 = clock();
       sel += t1 - t0;
       dec += t2 - t1;
       sho += t3 - t2;
@@ -130,8 +140,9 @@ int main(int argc, char** argv) {
     }
     // On a shared machine the wall clock runs on while the thread waits
     // for a core: the parts' shares of the round's wall time, scaled to
-    // its CPU time (the thread's clock is too dear to read per part).
-    const double scale = (ThreadCpuSeconds() - cpu0) / (MonotonicSeconds() - wall0);
+    // its CPU time (unless --thread-cpu: the thread's clock costs about a
+    // microsecond a shot read per part).
+    const double scale = thread_cpu ? 1 : (ThreadCpuSeconds() - cpu0) / (MonotonicSeconds() - wall0);
     sel *= scale;
     dec *= scale;
     sho *= scale;
