@@ -45,6 +45,13 @@ struct Box {
   glm::dvec3 lo{0.0}, hi{0.0};
   glm::dvec3 nlo{0.0}, nhi{0.0};
   double off = 0;
+  // A slab over the elements' corners: dot(nr, v) <= top for each (nr the
+  // plane of its first element's patch; up to rounding, Grouper::slack_).
+  // Thin where the elements lie in about one plane, as a tilted wall's
+  // whose box its plane crosses: the box alone cannot tell that none of
+  // them is in front of a patch of that wall (Worth).
+  glm::dvec3 nr{0.0};
+  double top = 0;
 };
 // A box of the tree to look into (Grouper::Nearest): levels_[level][i].
 struct Visit {
@@ -163,7 +170,7 @@ class Grouper {
   // are candidates.
   void IndexElements() {
     stamp_.assign(m_.elems.size(), 0);
-    BuildTree();
+    BuildTree(false);
     for (size_t p = 0; p < info_.size(); ++p) {
       PatchInfo& in = info_[p];
       // Emitters shoot alone: their direct light is most of the answer.
@@ -198,11 +205,22 @@ class Grouper {
 
   // A bounding-volume tree of the elements' boxes: the elements in the
   // Morton order of their boxes' centres, kLeaf to a leaf, each level
-  // above the union of two boxes of the one below, up to one root. The
-  // order is only the search's speed: every search is exact whatever the
-  // tree (Nearest), so the codes are coarse enough to hold the element's
-  // id below them, and sorted by radix (stable: ties stay in id order).
-  void BuildTree() {
+  // above the union of two boxes of the one below, up to one root; by
+  // facing, first by the way their patches face (the axis nearest the
+  // normal, and its sign), then in that order. The order is only the
+  // search's speed: every search is exact whatever the tree (Nearest), so
+  // the codes are coarse enough to hold the element's id below them, and
+  // sorted by radix (stable: ties stay in id order).
+  //
+  // Candidacy searches the tree in Morton order: a small patch's nearest
+  // receiver is mostly a patch beside it that faces another way (the
+  // floor by a box's side), in its own leaf or one near it. The searches
+  // for d(p) in full (Run) search the tree by facing: at a seam (a wall
+  // and the ceiling, finely tessellated) a Morton leaf holds elements of
+  // both, its box lies across the plane of either and in reach of it, so
+  // every search from either surface scanned every seam leaf in reach,
+  // while a leaf of one facing is passed whole (Worth).
+  void BuildTree(bool by_facing) {
     const size_t n = m_.elems.size();
     CHECK(n <= size_t{1} << kIdBits);
     // An element's bounding box, made where needed (twice, in the mesh's
@@ -222,13 +240,27 @@ class Grouper {
       lo = v ? glm::min(lo, m_.verts[v]) : m_.verts[v];
       hi = v ? glm::max(hi, m_.verts[v]) : m_.verts[v];
     }
+    // Every dot product and sum of the slabs' bounds and of the tests they
+    // stand for is of terms at most about 2 |x| + |y| + |z| of some
+    // vertex: their rounding, even summed up the tree's levels, stays far
+    // below this.
+    const glm::dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
+    slack_ = 1e-12 * (far.x + far.y + far.z);
     const glm::dvec3 scale = double(1 << kAxisBits) / glm::max(hi - lo, glm::dvec3(1e-300));
     std::vector<uint64_t> keyed(n);
     for (size_t e = 0; e < n; ++e) {
       bound(e, &a, &b);
       const glm::dvec3 q =
           glm::clamp((0.5 * (a + b) - lo) * scale, 0.0, double((1 << kAxisBits) - 1));
-      keyed[e] = (Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 | Spread(uint64_t(q.z)) << 2)
+      uint64_t facing = 0;
+      if (by_facing) {
+        const glm::dvec3& nn = info_[size_t(m_.elems[e].patch)].n;
+        const glm::dvec3 an = glm::abs(nn);
+        const int axis = an.x >= an.y && an.x >= an.z ? 0 : an.y >= an.z ? 1 : 2;
+        facing = uint64_t(2 * axis + (nn[axis] < 0));
+      }
+      keyed[e] = (facing << 3 * kAxisBits | Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 |
+                  Spread(uint64_t(q.z)) << 2)
                      << kIdBits |
                  e;
     }
@@ -253,7 +285,12 @@ class Grouper {
     levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
     for (size_t i = 0; i < n; ++i) {
       const PatchInfo& in = info_[size_t(patch_of_[i])];
-      Extend(&levels_[0][i / kLeaf], {elo_[i], ehi_[i], in.n, in.n, in.offset}, i % kLeaf == 0);
+      const Element& el = m_.elems[size_t(order_[i])];
+      double top = glm::dot(in.n, m_.verts[size_t(el.v[0])]);
+      for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k)
+        top = std::max(top, glm::dot(in.n, m_.verts[size_t(el.v[k])]));
+      Extend(&levels_[0][i / kLeaf], {elo_[i], ehi_[i], in.n, in.n, in.offset, in.n, top},
+             i % kLeaf == 0);
     }
     while (levels_.back().size() > 1) {
       const std::vector<Box>& below = levels_.back();
@@ -261,6 +298,8 @@ class Grouper {
       for (size_t i = 0; i < below.size(); ++i) Extend(&up[i / 2], below[i], i % 2 == 0);
       levels_.push_back(std::move(up));
     }
+    by_facing_ = by_facing;
+    recent_.fill(-1);  // places in the order before
   }
 
   // b made to hold o too (to be o, when b holds nothing yet).
@@ -274,6 +313,14 @@ class Grouper {
     b->nlo = glm::min(b->nlo, o.nlo);
     b->nhi = glm::max(b->nhi, o.nhi);
     b->off = std::min(b->off, o.off);
+    // dot(b.nr, v) = dot(o.nr, v) + dot(b.nr - o.nr, v), v in o's box.
+    b->top = std::max(b->top, o.top + Support(b->nr - o.nr, o.lo, o.hi));
+  }
+
+  // The most dot(d, x) reaches over box lo, hi (up to rounding).
+  static double Support(const glm::dvec3& d, const glm::dvec3& lo, const glm::dvec3& hi) {
+    return std::max(d.x * lo.x, d.x * hi.x) + std::max(d.y * lo.y, d.y * hi.y) +
+           std::max(d.z * lo.z, d.z * hi.z);
   }
 
   // May an element in b face patch p: some point of p's box in front of
@@ -319,6 +366,15 @@ class Grouper {
     const PatchInfo& in = info_[size_t(p)];
     double best = within;
     if (order_.empty()) return best;
+    // Only candidacy asks no farther than the width (Fits). The full
+    // searches start in Morton order, and change to the order by facing
+    // once they have scanned four times as many leaves as the tree has,
+    // about what building it again costs: a room of boxes, where they
+    // scan a few leaves each (about one a leaf of the tree in all), never
+    // pays for it; the tessellated box, where they scan the seams, pays
+    // once, early.
+    const bool full = !(kGroupReach * within <= width);
+    if (full && !by_facing_ && full_leaves_ > 4 * levels_[0].size()) BuildTree(true);
     // The elements that were nearest for the last few searches first
     // (patches come in mesh order, neighbours after one another): one of
     // them often ends the search at once, or bounds it.
@@ -340,7 +396,10 @@ class Grouper {
     // order are near it.
     const IdSpan tops = m_.Tops(p);
     const int home = tops.size() > 0 ? slot_of_[size_t(tops[0])] / int(kLeaf) : -1;
-    if (home >= 0 && !(kGroupReach * best < width)) ScanLeaf(p, home, &best, &found);
+    if (home >= 0 && !(kGroupReach * best < width)) {
+      ScanLeaf(p, home, &best, &found);
+      full_leaves_ += full;
+    }
     if (kGroupReach * best < width) {
       remember();
       return best;
@@ -348,7 +407,7 @@ class Grouper {
     // Any element nearer than `within` ends the search: depth first, the
     // nearer child first (of two as near, the one that holds the leaf of
     // p's first element), the first one found.
-    if (kGroupReach * within <= width) {
+    if (!full) {
       stack_.clear();
       Visit root{0, int(levels_.size()) - 1, 0};
       if (Worth(p, best, &root)) stack_.push_back(root);
@@ -386,6 +445,7 @@ class Grouper {
       heap_.pop_back();
       if (v.level == 0) {
         ScanLeaf(p, v.i, &best, &found);
+        ++full_leaves_;
         if (kGroupReach * best < width) break;
         continue;
       }
@@ -397,13 +457,16 @@ class Grouper {
   }
 
   // Is box v of the tree worth looking into for p's receivers nearer than
-  // best: not as far, not wholly on or behind p's plane, not facing away.
+  // best: not as far, not wholly on or behind p's plane (its box, or its
+  // slab: bounded with slack_ to spare, no corner farther in front than
+  // eps_, as Lights computes it), not facing away.
   // Sets v's distance.
   bool Worth(int p, double best, Visit* v) const {
     const PatchInfo& in = info_[size_t(p)];
     const Box& b = levels_[size_t(v->level)][size_t(v->i)];
     v->d = BoxDistance(b.lo, b.hi, in.c);
-    return v->d < best && Side(b.lo, b.hi, in.n, in.offset) >= 0 && MayFace(b, in);
+    return v->d < best && Side(b.lo, b.hi, in.n, in.offset) >= 0 && MayFace(b, in) &&
+           b.top + Support(in.n - b.nr, b.lo, b.hi) - in.offset > eps_ - slack_;
   }
 
   // The elements of leaf i that p lights nearer than *best: *best the
@@ -548,14 +611,17 @@ class Grouper {
 
   const Mesh& m_;
   double G_, C_, tau_, lift_, eps_;
+  double slack_ = 0;  // what rounding may take from a slab's bound (BuildTree)
   std::vector<PatchInfo> info_;
   std::vector<int32_t> corners_;     // the patches' corners, patch by patch (PatchInfo)
   Grid grid_;                        // elements by the cells of C_ they overlap (Clear)
   std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes, in order_
   static constexpr size_t kLeaf = 32;        // elements to a leaf of the tree
   // A Morton code's bits an axis, above an element's id (kMaxElements).
-  static constexpr int kAxisBits = 13, kIdBits = 24;
-  static_assert(kMaxElements <= (1 << kIdBits) && 3 * kAxisBits + kIdBits <= 64, "keys");
+  static constexpr int kAxisBits = 12, kIdBits = 24;  // and 3 bits of facing above them
+  static_assert(kMaxElements <= (1 << kIdBits) && 3 + 3 * kAxisBits + kIdBits <= 64, "keys");
+  bool by_facing_ = false;                   // the tree's order (BuildTree)
+  size_t full_leaves_ = 0;                   // leaves the full searches scanned (Nearest)
   std::vector<int> order_;                   // elements in the tree's order
   std::vector<int> patch_of_;                // ... and their patches
   std::vector<int> slot_of_;                 // each element's place in order_
