@@ -274,24 +274,30 @@ class Grouper {
     FreeStorage(&keyed);
     // The boxes in the tree's order (a leaf's are read in a row), written
     // to their places as the mesh is read in its own order.
+    // So are its corners' most in front along its patch's normal (its
+    // slab), kept until the leaves are made.
     elo_.resize(n);
     ehi_.resize(n);
     patch_of_.resize(n);
+    std::vector<double> tops(n);
     for (size_t e = 0; e < n; ++e) {
       const size_t i = size_t(slot_of_[e]);
       bound(e, &elo_[i], &ehi_[i]);
-      patch_of_[i] = m_.elems[e].patch;
+      const Element& el = m_.elems[e];
+      patch_of_[i] = el.patch;
+      const glm::dvec3& nn = info_[size_t(el.patch)].n;
+      double top = glm::dot(nn, m_.verts[size_t(el.v[0])]);
+      for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k)
+        top = std::max(top, glm::dot(nn, m_.verts[size_t(el.v[k])]));
+      tops[i] = top;
     }
     levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
     for (size_t i = 0; i < n; ++i) {
       const PatchInfo& in = info_[size_t(patch_of_[i])];
-      const Element& el = m_.elems[size_t(order_[i])];
-      double top = glm::dot(in.n, m_.verts[size_t(el.v[0])]);
-      for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k)
-        top = std::max(top, glm::dot(in.n, m_.verts[size_t(el.v[k])]));
-      Extend(&levels_[0][i / kLeaf], {elo_[i], ehi_[i], in.n, in.n, in.offset, in.n, top},
+      Extend(&levels_[0][i / kLeaf], {elo_[i], ehi_[i], in.n, in.n, in.offset, in.n, tops[i]},
              i % kLeaf == 0);
     }
+    FreeStorage(&tops);
     while (levels_.back().size() > 1) {
       const std::vector<Box>& below = levels_.back();
       std::vector<Box> up((below.size() + 1) / 2);
