@@ -246,12 +246,14 @@ class Grouper {
     // below this.
     const glm::dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
     slack_ = 1e-12 * (far.x + far.y + far.z);
-    const glm::dvec3 scale = double(1 << kAxisBits) / glm::max(hi - lo, glm::dvec3(1e-300));
+    // By facing, an axis gives a bit to the facing's three.
+    const int bits = by_facing ? kAxisBits - 1 : kAxisBits;
+    const glm::dvec3 scale = double(1 << bits) / glm::max(hi - lo, glm::dvec3(1e-300));
     std::vector<uint64_t> keyed(n);
     for (size_t e = 0; e < n; ++e) {
       bound(e, &a, &b);
       const glm::dvec3 q =
-          glm::clamp((0.5 * (a + b) - lo) * scale, 0.0, double((1 << kAxisBits) - 1));
+          glm::clamp((0.5 * (a + b) - lo) * scale, 0.0, double((1 << bits) - 1));
       uint64_t facing = 0;
       if (by_facing) {
         const glm::dvec3& nn = info_[size_t(m_.elems[e].patch)].n;
@@ -259,7 +261,7 @@ class Grouper {
         const int axis = an.x >= an.y && an.x >= an.z ? 0 : an.y >= an.z ? 1 : 2;
         facing = uint64_t(2 * axis + (nn[axis] < 0));
       }
-      keyed[e] = (facing << 3 * kAxisBits | Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 |
+      keyed[e] = (facing << 3 * bits | Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 |
                   Spread(uint64_t(q.z)) << 2)
                      << kIdBits |
                  e;
@@ -624,8 +626,8 @@ class Grouper {
   std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes, in order_
   static constexpr size_t kLeaf = 32;        // elements to a leaf of the tree
   // A Morton code's bits an axis, above an element's id (kMaxElements).
-  static constexpr int kAxisBits = 12, kIdBits = 24;  // and 3 bits of facing above them
-  static_assert(kMaxElements <= (1 << kIdBits) && 3 + 3 * kAxisBits + kIdBits <= 64, "keys");
+  static constexpr int kAxisBits = 13, kIdBits = 24;
+  static_assert(kMaxElements <= (1 << kIdBits) && 3 * kAxisBits + kIdBits <= 64, "keys");
   bool by_facing_ = false;                   // the tree's order (BuildTree)
   size_t full_leaves_ = 0;                   // leaves the full searches scanned (Nearest)
   std::vector<int> order_;                   // elements in the tree's order
