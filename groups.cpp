@@ -528,9 +528,9 @@ class Grouper {
     for (int k = 0; k < (el.IsTriangle() ? 3 : 4) && !front; ++k)
       front = glm::dot(in.n, m_.verts[el.v[k]]) - in.offset > eps_;
     if (!front) return false;
-    const MeshFace& f = m_.faces[m_.patches[el.patch].face];
+    const PatchInfo& f = info_[size_t(el.patch)];  // its face's plane
     for (int v : Corners(in))
-      if (glm::dot(f.normal, m_.verts[v]) - f.offset > eps_) return true;
+      if (glm::dot(f.n, m_.verts[v]) - f.offset > eps_) return true;
     return false;
   }
 
@@ -550,6 +550,11 @@ class Grouper {
   // Every element by the cells of C_ its bounding box overlaps (in the
   // tree's order: Clear's answer does not depend on it): made when the
   // first pair is tested (a scene where no two candidates meet needs none).
+  // A cell's elements in runs of one plane (their patches' normal and
+  // offset, bit for bit), each run after its length, negated: a segment
+  // that the plane does not cross crosses none of them (Clear), as the
+  // floor's dozens of elements in a cell at a fine tessellation, under
+  // every segment between two floor patches.
   void IndexGrid() {
     for (size_t k = 0; k < order_.size(); ++k) {
       const Cell a = CellOf(elo_[k], C_), b = CellOf(ehi_[k], C_);
@@ -557,6 +562,23 @@ class Grouper {
         for (int64_t y = a.y; y <= b.y; ++y)
           for (int64_t z = a.z; z <= b.z; ++z) grid_[{x, y, z}].push_back(order_[k]);
     }
+    auto plane = [&](int e) {
+      const PatchInfo& f = info_[size_t(m_.elems[size_t(e)].patch)];
+      return std::array<double, 4>{f.n.x, f.n.y, f.n.z, f.offset};
+    };
+    std::vector<int> runs;
+    for (auto& cell : grid_) {
+      std::vector<int>& list = cell.second;
+      std::stable_sort(list.begin(), list.end(), [&](int a, int b) { return plane(a) < plane(b); });
+      runs.clear();
+      for (size_t i = 0, j; i < list.size(); i = j) {
+        for (j = i + 1; j < list.size() && plane(list[j]) == plane(list[i]);) ++j;
+        runs.push_back(-int(j - i));
+        runs.insert(runs.end(), list.begin() + long(i), list.begin() + long(j));
+      }
+      list.swap(runs);
+    }
+    FreeStorage(&runs);
   }
 
   // The segment between the lifted centres of a and b crosses no element
@@ -584,12 +606,22 @@ class Grouper {
     for (int i = 0; i < 3; ++i) left += std::abs(last[i] - *at[i]);
     for (; left > 0; --left) {
       auto it = grid_.find(c);
-      if (it != grid_.end())
-        for (int e : it->second) {
-          if (stamp_[size_t(e)] == stamp_now_) continue;
-          stamp_[size_t(e)] = stamp_now_;
-          if (Crosses(e, P, Q, a, b)) return false;
+      if (it != grid_.end()) {
+        const std::vector<int>& list = it->second;
+        for (size_t r = 0, len; r < list.size(); r += 1 + len) {
+          len = size_t(-list[r]);
+          // Crosses' first test, for the run's plane.
+          const PatchInfo& f = info_[size_t(m_.elems[size_t(list[r + 1])].patch)];
+          const double sp = glm::dot(f.n, P) - f.offset, sq = glm::dot(f.n, Q) - f.offset;
+          if ((sp > 0) == (sq > 0) || sp == sq) continue;
+          for (size_t k = r + 1; k <= r + len; ++k) {
+            const int e = list[k];
+            if (stamp_[size_t(e)] == stamp_now_) continue;
+            stamp_[size_t(e)] = stamp_now_;
+            if (Crosses(e, P, Q, a, b)) return false;
+          }
         }
+      }
       if (c == end) break;
       const int i = next[0] < next[1] ? (next[0] < next[2] ? 0 : 2) : (next[1] < next[2] ? 1 : 2);
       if (next[i] > 1) break;
@@ -602,8 +634,8 @@ class Grouper {
   bool Crosses(int e, const glm::dvec3& P, const glm::dvec3& Q, int a, int b) const {
     const Element& el = m_.elems[e];
     if (el.patch == a || el.patch == b) return false;
-    const MeshFace& f = m_.faces[m_.patches[el.patch].face];
-    const double sp = glm::dot(f.normal, P) - f.offset, sq = glm::dot(f.normal, Q) - f.offset;
+    const PatchInfo& f = info_[size_t(el.patch)];  // its face's plane
+    const double sp = glm::dot(f.n, P) - f.offset, sq = glm::dot(f.n, Q) - f.offset;
     if ((sp > 0) == (sq > 0) || sp == sq) return false;
     const glm::dvec3 X = P + (Q - P) * (sp / (sp - sq));
     const int n = el.IsTriangle() ? 3 : 4;
@@ -612,7 +644,7 @@ class Grouper {
     for (int k = 0; k < n; ++k) {
       const glm::dvec3& u = m_.verts[el.v[k]];
       const glm::dvec3& w = m_.verts[el.v[(k + 1) % n]];
-      if (glm::dot(glm::cross(w - u, X - u), f.normal) < -1e-12 * P2) return false;
+      if (glm::dot(glm::cross(w - u, X - u), f.n) < -1e-12 * P2) return false;
     }
     return true;
   }
