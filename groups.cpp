@@ -551,7 +551,8 @@ class Grouper {
   // tree's order: Clear's answer does not depend on it): made when the
   // first pair is tested (a scene where no two candidates meet needs none).
   // A cell's elements in runs of one plane (their patches' normal and
-  // offset, bit for bit), each run after its length, negated: a segment
+  // offset, equal as doubles: Crosses' sides of it come out the same),
+  // each run after its length, negated: a segment
   // that the plane does not cross crosses none of them (Clear), as the
   // floor's dozens of elements in a cell at a fine tessellation, under
   // every segment between two floor patches.
