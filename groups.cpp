@@ -45,6 +45,13 @@ struct Box {
   glm::dvec3 lo{0.0}, hi{0.0};
   glm::dvec3 nlo{0.0}, nhi{0.0};
   double off = 0;
+  // A slab over the elements' corners: dot(nr, v) <= top for each (nr the
+  // plane of its first element's patch; up to rounding, Grouper::slack_).
+  // Thin where the elements lie in about one plane, as a tilted wall's
+  // whose box its plane crosses: the box alone cannot tell that none of
+  // them is in front of a patch of that wall (Worth).
+  glm::dvec3 nr{0.0};
+  double top = 0;
 };
 // A box of the tree to look into (Grouper::Nearest): levels_[level][i].
 struct Visit {
@@ -163,7 +170,7 @@ class Grouper {
   // are candidates.
   void IndexElements() {
     stamp_.assign(m_.elems.size(), 0);
-    BuildTree();
+    BuildTree(false);
     for (size_t p = 0; p < info_.size(); ++p) {
       PatchInfo& in = info_[p];
       // Emitters shoot alone: their direct light is most of the answer.
@@ -198,11 +205,22 @@ class Grouper {
 
   // A bounding-volume tree of the elements' boxes: the elements in the
   // Morton order of their boxes' centres, kLeaf to a leaf, each level
-  // above the union of two boxes of the one below, up to one root. The
-  // order is only the search's speed: every search is exact whatever the
-  // tree (Nearest), so the codes are coarse enough to hold the element's
-  // id below them, and sorted by radix (stable: ties stay in id order).
-  void BuildTree() {
+  // above the union of two boxes of the one below, up to one root; by
+  // facing, first by the way their patches face (the axis nearest the
+  // normal, and its sign), then in that order. The order is only the
+  // search's speed: every search is exact whatever the tree (Nearest), so
+  // the codes are coarse enough to hold the element's id below them, and
+  // sorted by radix (stable: ties stay in id order).
+  //
+  // Candidacy searches the tree in Morton order: a small patch's nearest
+  // receiver is mostly a patch beside it that faces another way (the
+  // floor by a box's side), in its own leaf or one near it. The searches
+  // for d(p) in full (Run) search the tree by facing: at a seam (a wall
+  // and the ceiling, finely tessellated) a Morton leaf holds elements of
+  // both, its box lies across the plane of either and in reach of it, so
+  // every search from either surface scanned every seam leaf in reach,
+  // while a leaf of one facing is passed whole (Worth).
+  void BuildTree(bool by_facing) {
     const size_t n = m_.elems.size();
     CHECK(n <= size_t{1} << kIdBits);
     // An element's bounding box, made where needed (twice, in the mesh's
@@ -222,13 +240,29 @@ class Grouper {
       lo = v ? glm::min(lo, m_.verts[v]) : m_.verts[v];
       hi = v ? glm::max(hi, m_.verts[v]) : m_.verts[v];
     }
-    const glm::dvec3 scale = double(1 << kAxisBits) / glm::max(hi - lo, glm::dvec3(1e-300));
+    // Every dot product and sum of the slabs' bounds and of the tests they
+    // stand for is of terms at most about 2 |x| + |y| + |z| of some
+    // vertex: their rounding, even summed up the tree's levels, stays far
+    // below this.
+    const glm::dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
+    slack_ = 1e-12 * (far.x + far.y + far.z);
+    // By facing, an axis gives a bit to the facing's three.
+    const int bits = by_facing ? kAxisBits - 1 : kAxisBits;
+    const glm::dvec3 scale = double(1 << bits) / glm::max(hi - lo, glm::dvec3(1e-300));
     std::vector<uint64_t> keyed(n);
     for (size_t e = 0; e < n; ++e) {
       bound(e, &a, &b);
       const glm::dvec3 q =
-          glm::clamp((0.5 * (a + b) - lo) * scale, 0.0, double((1 << kAxisBits) - 1));
-      keyed[e] = (Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 | Spread(uint64_t(q.z)) << 2)
+          glm::clamp((0.5 * (a + b) - lo) * scale, 0.0, double((1 << bits) - 1));
+      uint64_t facing = 0;
+      if (by_facing) {
+        const glm::dvec3& nn = info_[size_t(m_.elems[e].patch)].n;
+        const glm::dvec3 an = glm::abs(nn);
+        const int axis = an.x >= an.y && an.x >= an.z ? 0 : an.y >= an.z ? 1 : 2;
+        facing = uint64_t(2 * axis + (nn[axis] < 0));
+      }
+      keyed[e] = (facing << 3 * bits | Spread(uint64_t(q.x)) | Spread(uint64_t(q.y)) << 1 |
+                  Spread(uint64_t(q.z)) << 2)
                      << kIdBits |
                  e;
     }
@@ -242,25 +276,38 @@ class Grouper {
     FreeStorage(&keyed);
     // The boxes in the tree's order (a leaf's are read in a row), written
     // to their places as the mesh is read in its own order.
+    // So are its corners' most in front along its patch's normal (its
+    // slab), kept until the leaves are made.
     elo_.resize(n);
     ehi_.resize(n);
     patch_of_.resize(n);
+    std::vector<double> tops(n);
     for (size_t e = 0; e < n; ++e) {
       const size_t i = size_t(slot_of_[e]);
       bound(e, &elo_[i], &ehi_[i]);
-      patch_of_[i] = m_.elems[e].patch;
+      const Element& el = m_.elems[e];
+      patch_of_[i] = el.patch;
+      const glm::dvec3& nn = info_[size_t(el.patch)].n;
+      double top = glm::dot(nn, m_.verts[size_t(el.v[0])]);
+      for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k)
+        top = std::max(top, glm::dot(nn, m_.verts[size_t(el.v[k])]));
+      tops[i] = top;
     }
     levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
     for (size_t i = 0; i < n; ++i) {
       const PatchInfo& in = info_[size_t(patch_of_[i])];
-      Extend(&levels_[0][i / kLeaf], {elo_[i], ehi_[i], in.n, in.n, in.offset}, i % kLeaf == 0);
+      Extend(&levels_[0][i / kLeaf], {elo_[i], ehi_[i], in.n, in.n, in.offset, in.n, tops[i]},
+             i % kLeaf == 0);
     }
+    FreeStorage(&tops);
     while (levels_.back().size() > 1) {
       const std::vector<Box>& below = levels_.back();
       std::vector<Box> up((below.size() + 1) / 2);
       for (size_t i = 0; i < below.size(); ++i) Extend(&up[i / 2], below[i], i % 2 == 0);
       levels_.push_back(std::move(up));
     }
+    by_facing_ = by_facing;
+    recent_.fill(-1);  // places in the order before
   }
 
   // b made to hold o too (to be o, when b holds nothing yet).
@@ -274,6 +321,14 @@ class Grouper {
     b->nlo = glm::min(b->nlo, o.nlo);
     b->nhi = glm::max(b->nhi, o.nhi);
     b->off = std::min(b->off, o.off);
+    // dot(b.nr, v) = dot(o.nr, v) + dot(b.nr - o.nr, v), v in o's box.
+    b->top = std::max(b->top, o.top + Support(b->nr - o.nr, o.lo, o.hi));
+  }
+
+  // The most dot(d, x) reaches over box lo, hi (up to rounding).
+  static double Support(const glm::dvec3& d, const glm::dvec3& lo, const glm::dvec3& hi) {
+    return std::max(d.x * lo.x, d.x * hi.x) + std::max(d.y * lo.y, d.y * hi.y) +
+           std::max(d.z * lo.z, d.z * hi.z);
   }
 
   // May an element in b face patch p: some point of p's box in front of
@@ -319,6 +374,15 @@ class Grouper {
     const PatchInfo& in = info_[size_t(p)];
     double best = within;
     if (order_.empty()) return best;
+    // Only candidacy asks no farther than the width (Fits). The full
+    // searches start in Morton order, and change to the order by facing
+    // once they have scanned four times as many leaves as the tree has,
+    // about what building it again costs: a room of boxes, where they
+    // scan a few leaves each (about one a leaf of the tree in all), never
+    // pays for it; the tessellated box, where they scan the seams, pays
+    // once, early.
+    const bool full = !(kGroupReach * within <= width);
+    if (full && !by_facing_ && full_leaves_ > 4 * levels_[0].size()) BuildTree(true);
     // The elements that were nearest for the last few searches first
     // (patches come in mesh order, neighbours after one another): one of
     // them often ends the search at once, or bounds it.
@@ -340,7 +404,10 @@ class Grouper {
     // order are near it.
     const IdSpan tops = m_.Tops(p);
     const int home = tops.size() > 0 ? slot_of_[size_t(tops[0])] / int(kLeaf) : -1;
-    if (home >= 0 && !(kGroupReach * best < width)) ScanLeaf(p, home, &best, &found);
+    if (home >= 0 && !(kGroupReach * best < width)) {
+      ScanLeaf(p, home, &best, &found);
+      full_leaves_ += full;
+    }
     if (kGroupReach * best < width) {
       remember();
       return best;
@@ -348,7 +415,7 @@ class Grouper {
     // Any element nearer than `within` ends the search: depth first, the
     // nearer child first (of two as near, the one that holds the leaf of
     // p's first element), the first one found.
-    if (kGroupReach * within <= width) {
+    if (!full) {
       stack_.clear();
       Visit root{0, int(levels_.size()) - 1, 0};
       if (Worth(p, best, &root)) stack_.push_back(root);
@@ -386,6 +453,7 @@ class Grouper {
       heap_.pop_back();
       if (v.level == 0) {
         ScanLeaf(p, v.i, &best, &found);
+        ++full_leaves_;
         if (kGroupReach * best < width) break;
         continue;
       }
@@ -397,13 +465,16 @@ class Grouper {
   }
 
   // Is box v of the tree worth looking into for p's receivers nearer than
-  // best: not as far, not wholly on or behind p's plane, not facing away.
+  // best: not as far, not wholly on or behind p's plane (its box, or its
+  // slab: bounded with slack_ to spare, no corner farther in front than
+  // eps_, as Lights computes it), not facing away.
   // Sets v's distance.
   bool Worth(int p, double best, Visit* v) const {
     const PatchInfo& in = info_[size_t(p)];
     const Box& b = levels_[size_t(v->level)][size_t(v->i)];
     v->d = BoxDistance(b.lo, b.hi, in.c);
-    return v->d < best && Side(b.lo, b.hi, in.n, in.offset) >= 0 && MayFace(b, in);
+    return v->d < best && Side(b.lo, b.hi, in.n, in.offset) >= 0 && MayFace(b, in) &&
+           b.top + Support(in.n - b.nr, b.lo, b.hi) - in.offset > eps_ - slack_;
   }
 
   // The elements of leaf i that p lights nearer than *best: *best the
@@ -457,9 +528,9 @@ class Grouper {
     for (int k = 0; k < (el.IsTriangle() ? 3 : 4) && !front; ++k)
       front = glm::dot(in.n, m_.verts[el.v[k]]) - in.offset > eps_;
     if (!front) return false;
-    const MeshFace& f = m_.faces[m_.patches[el.patch].face];
+    const PatchInfo& f = info_[size_t(el.patch)];  // its face's plane
     for (int v : Corners(in))
-      if (glm::dot(f.normal, m_.verts[v]) - f.offset > eps_) return true;
+      if (glm::dot(f.n, m_.verts[v]) - f.offset > eps_) return true;
     return false;
   }
 
@@ -479,6 +550,12 @@ class Grouper {
   // Every element by the cells of C_ its bounding box overlaps (in the
   // tree's order: Clear's answer does not depend on it): made when the
   // first pair is tested (a scene where no two candidates meet needs none).
+  // A cell's elements in runs of one plane (their patches' normal and
+  // offset, equal as doubles: Crosses' sides of it come out the same),
+  // each run after its length, negated: a segment
+  // that the plane does not cross crosses none of them (Clear), as the
+  // floor's dozens of elements in a cell at a fine tessellation, under
+  // every segment between two floor patches.
   void IndexGrid() {
     for (size_t k = 0; k < order_.size(); ++k) {
       const Cell a = CellOf(elo_[k], C_), b = CellOf(ehi_[k], C_);
@@ -486,6 +563,23 @@ class Grouper {
         for (int64_t y = a.y; y <= b.y; ++y)
           for (int64_t z = a.z; z <= b.z; ++z) grid_[{x, y, z}].push_back(order_[k]);
     }
+    auto plane = [&](int e) {
+      const PatchInfo& f = info_[size_t(m_.elems[size_t(e)].patch)];
+      return std::array<double, 4>{f.n.x, f.n.y, f.n.z, f.offset};
+    };
+    std::vector<int> runs;
+    for (auto& cell : grid_) {
+      std::vector<int>& list = cell.second;
+      std::stable_sort(list.begin(), list.end(), [&](int a, int b) { return plane(a) < plane(b); });
+      runs.clear();
+      for (size_t i = 0, j; i < list.size(); i = j) {
+        for (j = i + 1; j < list.size() && plane(list[j]) == plane(list[i]);) ++j;
+        runs.push_back(-int(j - i));
+        runs.insert(runs.end(), list.begin() + long(i), list.begin() + long(j));
+      }
+      list.swap(runs);
+    }
+    FreeStorage(&runs);
   }
 
   // The segment between the lifted centres of a and b crosses no element
@@ -513,12 +607,22 @@ class Grouper {
     for (int i = 0; i < 3; ++i) left += std::abs(last[i] - *at[i]);
     for (; left > 0; --left) {
       auto it = grid_.find(c);
-      if (it != grid_.end())
-        for (int e : it->second) {
-          if (stamp_[size_t(e)] == stamp_now_) continue;
-          stamp_[size_t(e)] = stamp_now_;
-          if (Crosses(e, P, Q, a, b)) return false;
+      if (it != grid_.end()) {
+        const std::vector<int>& list = it->second;
+        for (size_t r = 0, len; r < list.size(); r += 1 + len) {
+          len = size_t(-list[r]);
+          // Crosses' first test, for the run's plane.
+          const PatchInfo& f = info_[size_t(m_.elems[size_t(list[r + 1])].patch)];
+          const double sp = glm::dot(f.n, P) - f.offset, sq = glm::dot(f.n, Q) - f.offset;
+          if ((sp > 0) == (sq > 0) || sp == sq) continue;
+          for (size_t k = r + 1; k <= r + len; ++k) {
+            const int e = list[k];
+            if (stamp_[size_t(e)] == stamp_now_) continue;
+            stamp_[size_t(e)] = stamp_now_;
+            if (Crosses(e, P, Q, a, b)) return false;
+          }
         }
+      }
       if (c == end) break;
       const int i = next[0] < next[1] ? (next[0] < next[2] ? 0 : 2) : (next[1] < next[2] ? 1 : 2);
       if (next[i] > 1) break;
@@ -531,8 +635,8 @@ class Grouper {
   bool Crosses(int e, const glm::dvec3& P, const glm::dvec3& Q, int a, int b) const {
     const Element& el = m_.elems[e];
     if (el.patch == a || el.patch == b) return false;
-    const MeshFace& f = m_.faces[m_.patches[el.patch].face];
-    const double sp = glm::dot(f.normal, P) - f.offset, sq = glm::dot(f.normal, Q) - f.offset;
+    const PatchInfo& f = info_[size_t(el.patch)];  // its face's plane
+    const double sp = glm::dot(f.n, P) - f.offset, sq = glm::dot(f.n, Q) - f.offset;
     if ((sp > 0) == (sq > 0) || sp == sq) return false;
     const glm::dvec3 X = P + (Q - P) * (sp / (sp - sq));
     const int n = el.IsTriangle() ? 3 : 4;
@@ -541,13 +645,14 @@ class Grouper {
     for (int k = 0; k < n; ++k) {
       const glm::dvec3& u = m_.verts[el.v[k]];
       const glm::dvec3& w = m_.verts[el.v[(k + 1) % n]];
-      if (glm::dot(glm::cross(w - u, X - u), f.normal) < -1e-12 * P2) return false;
+      if (glm::dot(glm::cross(w - u, X - u), f.n) < -1e-12 * P2) return false;
     }
     return true;
   }
 
   const Mesh& m_;
   double G_, C_, tau_, lift_, eps_;
+  double slack_ = 0;  // what rounding may take from a slab's bound (BuildTree)
   std::vector<PatchInfo> info_;
   std::vector<int32_t> corners_;     // the patches' corners, patch by patch (PatchInfo)
   Grid grid_;                        // elements by the cells of C_ they overlap (Clear)
@@ -556,6 +661,8 @@ class Grouper {
   // A Morton code's bits an axis, above an element's id (kMaxElements).
   static constexpr int kAxisBits = 13, kIdBits = 24;
   static_assert(kMaxElements <= (1 << kIdBits) && 3 * kAxisBits + kIdBits <= 64, "keys");
+  bool by_facing_ = false;                   // the tree's order (BuildTree)
+  size_t full_leaves_ = 0;                   // leaves the full searches scanned (Nearest)
   std::vector<int> order_;                   // elements in the tree's order
   std::vector<int> patch_of_;                // ... and their patches
   std::vector<int> slot_of_;                 // each element's place in order_

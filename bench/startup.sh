@@ -22,7 +22,9 @@
 # made the same mesh and groups (the hash of the mesh and of every
 # group's members).
 #   STARTUP_BEFORE=/tmp/before/radiosity-startup TESS=47 JOBS= bash bench/startup.sh 20000 200000
-# (JOBS= skips the runs with workers.)
+# (JOBS= skips the runs with workers.) OBJS adds scenes as they are (OBJ
+# files), each joined and with --no-join, after the generated ones:
+#   STARTUP_BEFORE=... OBJS=/work/scenes/cornell80t.obj JOBS= bash bench/startup.sh 200000
 cd "$(dirname "$0")/.." || exit 1
 RAD=${RADIOSITY:-$PWD/radiosity}
 GEN=${SCENEGEN:-$PWD/build/scenegen}
@@ -100,4 +102,8 @@ for k in $TESS; do
   "$GEN" tessellate scenes/cornell.obj "$k" "$T/cornell$k.obj" --tri >/dev/null 2>&1 || exit 1
   parts "$T/cornell$k.obj"
   parts "$T/cornell$k.obj" --no-join
+done
+for obj in $OBJS; do
+  parts "$obj"
+  parts "$obj" --no-join
 done

@@ -116,6 +116,70 @@ TEST(Groups, OnlyReceiversFacingAPatchLimitItsGroups) {
   EXPECT_TRUE(with_panel(false).groups.empty());
 }
 
+// A valley of small tiles, tilted in no axis's plane: two halves 3 degrees
+// up from the crease, each tile a face of its own. A tile's receivers are
+// the other half's (each in front of the other), not its own half's
+// (coplanar, up to rounding); bounding boxes across both, the search can
+// pass its own half's only by their planes (Worth's slab), and must not
+// pass the other half's. So a group is no wider than the distance from any
+// member's centre to the nearest box of the other half's elements, and
+// never spans the crease; far from it, groups form.
+TEST(Groups, TilesOfATiltedValleyGroupOnlyAsFarAsTheOtherSide) {
+  const int n = 12;
+  const double slope = std::tan(3 * M_PI / 180);
+  // Turned 0.6 about x, then 0.4 about z (glm's matrices: by columns).
+  const double c1 = std::cos(0.6), s1 = std::sin(0.6), c2 = std::cos(0.4), s2 = std::sin(0.4);
+  const glm::dmat3 turn = glm::dmat3(c2, s2, 0, -s2, c2, 0, 0, 0, 1) *
+                          glm::dmat3(1, 0, 0, 0, c1, s1, 0, -s1, c1);
+  auto at = [&](double x, double z) {
+    return turn * glm::dvec3(x, slope * std::abs(x - 0.5), z) + glm::dvec3(3, -2, 1);
+  };
+  Scene s = EmptyScene();
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double x = double(i) / n, z = double(j) / n, d = 1.0 / n;
+      AddFace(&s, {at(x, z), at(x, z + d), at(x + d, z + d), at(x + d, z)}, glm::dvec3(0.5),
+              glm::dvec3(0));
+    }
+  for (size_t f = 0; f < s.faces.size(); ++f) s.faces[f].index = int(f);
+  MeshOptions o = Half();
+  o.join = false;
+  const Mesh m = MakeMesh(s, o);
+  ASSERT_EQ(m.patches.size(), size_t(n * n));  // a patch a tile, in face order
+  auto left = [&](int p) { return p / n < n / 2; };
+  auto box = [&](int e, glm::dvec3* lo, glm::dvec3* hi) {
+    const Element& el = m.elems[e];
+    *lo = *hi = m.verts[el.v[0]];
+    for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k) {
+      *lo = glm::min(*lo, m.verts[el.v[k]]);
+      *hi = glm::max(*hi, m.verts[el.v[k]]);
+    }
+  };
+  size_t members = 0;
+  for (const PatchGroup& g : m.groups) {
+    members += g.members.size();
+    glm::dvec3 lo(1e9), hi(-1e9), a, b;
+    double nearest = 1e9;
+    for (int q : g.members) {
+      EXPECT_EQ(left(q), left(g.members[0]));
+      for (int e : m.Tops(q)) {
+        box(e, &a, &b);
+        lo = glm::min(lo, a);
+        hi = glm::max(hi, b);
+      }
+      for (size_t e = 0; e < m.elems.size(); ++e)
+        if (left(m.elems[e].patch) != left(q)) {
+          box(int(e), &a, &b);
+          const glm::dvec3 c = m.patches[q].center;
+          nearest = std::min(nearest, glm::length(glm::max(glm::max(a - c, c - b), 0.0)));
+        }
+    }
+    EXPECT_LE(glm::length(hi - lo), kGroupReach * nearest);
+  }
+  EXPECT_GE(m.groups.size(), 8u);
+  EXPECT_GE(members, 24u);
+}
+
 // A group's shot: the members give up exactly their unshot power, what the
 // receivers gain is ρ·ΣxA·F, and no member receives from its own group;
 // on coplanar tiles and on tiles up to 0.003 above one another.
