@@ -414,12 +414,10 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
         all &= code_[vid[i]];
         any |= code_[vid[i]];
       }
-      // The hemicube faces to draw it on: in mask and not wholly outside
-      // one plane of the face; found without a branch per face.
-      uint32_t out = 0;
-      for (int h = 0; h < 5; ++h) out |= uint32_t(((all >> (5 * h)) & 31) != 0) << h;
-      for (uint32_t todo = mask & ~out; todo; todo &= todo - 1) {
+      // The hemicube faces in mask (one or two for most faces), by its bits.
+      for (uint32_t todo = mask; todo; todo &= todo - 1) {
         const int h = __builtin_ctz(todo);
+        if ((all >> (5 * h)) & 31) continue;  // wholly outside one plane of face h
         float pt[9][2];  // an 8-gon clipped by one plane
         if (!((any >> (5 * h)) & kNear)) {
           for (int i = 0; i < n; ++i) {
