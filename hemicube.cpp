@@ -100,8 +100,7 @@ inline int Ceil(float v) {
 
 // The pixel rows a polygon spanning [y0, y1] in y covers on a hemicube
 // face of H rows: those whose centre y + 1/2 lies within, [first, second)
-// (empty when first >= second). Scan draws these; Skip's test of them
-// must find the very same.
+// (empty when first >= second): those Scan draws.
 inline std::pair<int, int> Rows(float y0, float y1, int H) {
   const float lim = 1e9f;  // keeps Ceil in range; far outside any face
   return {std::max(0, Ceil(std::max(y0, -lim) - 0.5f)), std::min(H, Ceil(std::min(y1, lim) - 0.5f))};
@@ -116,37 +115,38 @@ inline int64_t Fixed(float v) {
 // One chain of a convex polygon's edges, walked down the rows. Each edge is
 // set up from its own endpoints, upper one first, and stepped from its own
 // first row, so an edge shared by two neighbours gives both bit-identical
-// crossings on every row.
+// crossings on every row. Plain data that Scan keeps in registers: most
+// polygons are a few pixels, and an out-of-line walk kept its state in
+// memory and cost as much as their pixels.
 struct Chain {
-  const float (*pt)[2];
-  int n, at, step, end;       // current upper vertex, direction, bottom vertex
+  int at, step, end;          // current upper vertex, direction, bottom vertex
   int r1 = INT32_MIN;         // first row below the current edge
   int64_t x = 0, dx = 0;      // crossing at the current row's centre; per row
-
-  // Moves to the edge that crosses row `row`: a compare on most rows, the
-  // edge set-up only where one edge ends.
-  void Seek(int row) {
-    if (row >= r1 && at != end) Next(row);
-  }
-  void Next(int row) {
-    while (row >= r1 && at != end) {
-      const float* p = pt[at];
-      at += step;  // wrap without a division: this runs per edge
-      if (at == n) at = 0;
-      if (at < 0) at = n - 1;
-      const float* q = pt[at];
-      const float* u = p[1] < q[1] ? p : q;
-      const float* l = p[1] < q[1] ? q : p;
-      const int r0 = Ceil(u[1] - 0.5f);
-      r1 = Ceil(l[1] - 0.5f);
-      if (r0 >= r1 || row >= r1) continue;  // no row centre on this edge for us
-      const float dxdy = (l[0] - u[0]) / (l[1] - u[1]);
-      x = Fixed(u[0] + (float(r0) + 0.5f - u[1]) * dxdy);
-      dx = Fixed(dxdy);
-      x += int64_t(row - r0) * dx;  // rows above the face's top were clipped
-    }
-  }
 };
+
+// Moves chain c to the edge that crosses row `row` of polygon pt[0..n),
+// whose vertex i has first row ry[i] = Ceil(pt[i][1] - 0.5f): a compare on
+// most rows, the edge set-up only where one edge ends.
+__attribute__((always_inline)) inline void Seek(Chain* c, const float (*pt)[2], const int* ry,
+                                                int n, int row) {
+  while (row >= c->r1 && c->at != c->end) {
+    const int i = c->at;
+    int j = i + c->step;  // wrap without a division: this runs per edge
+    if (j == n) j = 0;
+    if (j < 0) j = n - 1;
+    c->at = j;
+    const bool down = pt[i][1] < pt[j][1];
+    const float* u = pt[down ? i : j];
+    const float* l = pt[down ? j : i];
+    const int r0 = ry[down ? i : j];
+    c->r1 = ry[down ? j : i];
+    if (r0 >= c->r1 || row >= c->r1) continue;  // no row centre on this edge for us
+    const float dxdy = (l[0] - u[0]) / (l[1] - u[1]);
+    c->x = Fixed(u[0] + (float(r0) + 0.5f - u[1]) * dxdy);
+    c->dx = Fixed(dxdy);
+    c->x += int64_t(row - r0) * c->dx;  // rows above the face's top were clipped
+  }
+}
 
 // Pixel index of the first centre at or right of fixed-point x: ceil(x - 0.5).
 inline int64_t FirstPixel(int64_t x) { return (x - 32768 + 65535) >> 16; }
@@ -157,39 +157,47 @@ inline int64_t FirstPixel(int64_t x) { return (x - 32768 + 65535) >> 16; }
 // with leaf `rank`, depth 1/d = za*X + zb*Y + zc: pixel centres in
 // [left, right) x [top, bottom), so shared edges give each pixel to one side.
 // A tie in depth goes to the lower rank, the leaf first in face order, so
-// that the buffer ends the same whatever order the leaves come in.
+// that the buffer ends the same whatever order the leaves come in. With
+// `cull`, a leaf Hidden finds unable to win a pixel is left undrawn, from
+// the bounding box found here (one pass over the corners for both).
 void Hemicube::Scan(int face, const float (*pt)[2], int n, float za, float zb,
-                    float zc, int32_t rank) {
+                    float zc, int32_t rank, bool cull) {
   const int R = res_, H = face == 0 ? R : R / 2;
+  int top = 0, bottom = 0;
+  float x0 = pt[0][0], x1 = x0;
+  for (int i = 1; i < n; ++i) {
+    if (pt[i][1] < pt[top][1]) top = i;
+    if (pt[i][1] > pt[bottom][1]) bottom = i;
+    x0 = std::min(x0, pt[i][0]);
+    x1 = std::max(x1, pt[i][0]);
+  }
+  const auto [ya, yb] = Rows(pt[top][1], pt[bottom][1], H);
+  if (ya >= yb) return;
+  if (cull && Hidden(face, x0, x1, pt[top][1], pt[bottom][1], za, zb, zc)) return;
   float* depth = depth_.data() + (face == 0 ? 0 : size_t(R) * R + size_t(face - 1) * H * R);
   int32_t* item = item_.data() + (depth - depth_.data());
   const int tw = (R + kTile - 1) / kTile;
   uint8_t* dirty = dirty_.data() +
                    (face == 0 ? 0 : size_t(tw) * tw + size_t(face - 1) * ((H + kTile - 1) / kTile) * tw);
-  int top = 0, bottom = 0;
-  for (int i = 1; i < n; ++i) {
-    if (pt[i][1] < pt[top][1]) top = i;
-    if (pt[i][1] > pt[bottom][1]) bottom = i;
-  }
-  const auto [ya, yb] = Rows(pt[top][1], pt[bottom][1], H);
-  if (ya >= yb) return;
   rows_[face][0] = std::min(rows_[face][0], ya);
   rows_[face][1] = std::max(rows_[face][1], yb);
-  Chain a{pt, n, top, 1, bottom}, b{pt, n, top, -1, bottom};
-  int left = R, right = 0;  // the columns it wrote, for the tiles to mark
+  int ry[9];  // each vertex's first row, once rather than per edge end
+  for (int i = 0; i < n; ++i) ry[i] = Ceil(pt[i][1] - 0.5f);
+  Chain a{top, 1, bottom}, b{top, -1, bottom};
+  // The columns it may have written, for the tiles to mark: empty rows'
+  // bounds too (within the polygon's; no branch per row), a tile more at worst.
+  int left = R, right = 0;
   for (int y = ya; y < yb; ++y, a.x += a.dx, b.x += b.dx) {
-    a.Seek(y);
-    b.Seek(y);
+    Seek(&a, pt, ry, n, y);
+    Seek(&b, pt, ry, n, y);
     const int64_t xl = std::min(a.x, b.x), xr = std::max(a.x, b.x);
     const int xa = int(std::clamp<int64_t>(FirstPixel(xl), 0, R));
     const int xb = int(std::clamp<int64_t>(FirstPixel(xr), 0, R));
     const float yc = y + 0.5f;
     float* drow = depth + size_t(y) * R;
     int32_t* irow = item + size_t(y) * R;
-    if (xa < xb) {
-      left = std::min(left, xa);
-      right = std::max(right, xb);
-    }
+    left = std::min(left, xa);
+    right = std::max(right, xb);
     const float zrow = zb * yc + zc + 0.5f * za;
     // Branch-free so that the compiler can vectorise the depth test.
     for (int x = xa; x < xb; ++x) {
@@ -200,9 +208,16 @@ void Hemicube::Scan(int face, const float (*pt)[2], int n, float za, float zb,
     }
   }
   // The tiles of its bounding rectangle are marked, once: a few more than
-  // it wrote at worst, each only recomputed when tested.
-  for (int ty = ya / kTile; left < right && ty <= (yb - 1) / kTile; ++ty)
-    for (int t = left / kTile; t <= (right - 1) / kTile; ++t) dirty[size_t(ty) * tw + t] = 1;
+  // it wrote at worst, each only recomputed when tested. Most polygons lie
+  // within a tile or two across: the first and last are stored, a loop (a
+  // memset call, costlier than a small polygon's rows) only for those between.
+  if (left >= right) return;
+  const int tl = left / kTile, tr = (right - 1) / kTile;
+  for (int ty = ya / kTile; ty <= (yb - 1) / kTile; ++ty) {
+    uint8_t* row = dirty + size_t(ty) * tw;
+    row[tl] = row[tr] = 1;
+    for (int t = tl + 1; t < tr; ++t) row[t] = 1;
+  }
 }
 
 bool Hemicube::Open(int h, int xa, int xb, int ra, int rb, float zt) {
@@ -233,27 +248,19 @@ bool Hemicube::Open(int h, int xa, int xb, int ra, int rb, float zt) {
   return false;
 }
 
-// Whether a leaf, polygon pt[0..n) on face h, could win no pixel, so that
-// Scan need not be called: no pixel centre within its bounding box (most
-// leaves of a finely cut scene, smaller than a pixel), or, for a large
-// leaf (pixel bounding box of kHiddenArea or more), wholly behind what face
-// h holds: its nearest depth over that box (the plane's at a corner, in
-// double, raised well past Scan's float rounding) against the tiles, as
-// Visible tests boxes. A leaf skipped could not have written a pixel, so
-// the buffer is as Scan would have left it.
-bool Hemicube::Skip(int h, const float (*pt)[2], int n, float za, float zb, float zc) {
+// Whether a leaf on face h, its pixel bounding box [x0, x1] x [y0, y1]
+// holding some of the face's rows, could win no pixel, so that Scan need
+// not draw it: no pixel centre within that box (most leaves of a finely
+// cut scene, smaller than a pixel), or, for a large leaf (pixel bounding
+// box of kHiddenArea or more), wholly behind what face h holds: its
+// nearest depth over that box (the plane's at a corner, in double, raised
+// well past Scan's float rounding) against the tiles, as Visible tests
+// boxes. A leaf left undrawn could not have written a pixel, so the buffer
+// is as drawing it would have left it.
+bool Hemicube::Hidden(int h, float x0, float x1, float y0, float y1, float za, float zb,
+                      float zc) {
   constexpr double kHiddenArea = 64;
-  float x0 = pt[0][0], x1 = x0, y0 = pt[0][1], y1 = y0;
-  for (int i = 1; i < n; ++i) {
-    x0 = std::min(x0, pt[i][0]);
-    x1 = std::max(x1, pt[i][0]);
-    y0 = std::min(y0, pt[i][1]);
-    y1 = std::max(y1, pt[i][1]);
-  }
   const int R = res_, H = h == 0 ? R : R / 2;
-  // Scan's rows: none, nothing drawn.
-  const auto [ya, yb] = Rows(y0, y1, H);
-  if (ya >= yb) return true;
   if (y1 - y0 < 8) {
     // Scan's edge crossings lie in [x0, x1] but for float rounding (a few
     // 2^-24 of |x| and of the width) and 16.16 steps (under 2^-16 a row,
@@ -407,15 +414,17 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
         all &= code_[vid[i]];
         any |= code_[vid[i]];
       }
-      for (int h = 0; h < 5; ++h) {
-        if (!((mask >> h) & 1) || ((all >> (5 * h)) & 31)) continue;  // not here, or wholly outside one plane
+      // The hemicube faces in mask (one or two for most faces), by its bits.
+      for (uint32_t todo = mask; todo; todo &= todo - 1) {
+        const int h = __builtin_ctz(todo);
+        if ((all >> (5 * h)) & 31) continue;  // wholly outside one plane of face h
         float pt[9][2];  // an 8-gon clipped by one plane
         if (!((any >> (5 * h)) & kNear)) {
           for (int i = 0; i < n; ++i) {
             pt[i][0] = sx_[h][vid[i]];
             pt[i][1] = sy_[h][vid[i]];
           }
-          if (!culling_ || !Skip(h, pt, n, za[h], zb[h], zc[h])) Scan(h, pt, n, za[h], zb[h], zc[h], r);
+          Scan(h, pt, n, za[h], zb[h], zc[h], r, culling_);
           continue;
         }
         // Crosses the near plane: clip in this face's frame, then project.
@@ -450,7 +459,7 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
           pt[i][0] = poly[i][0] * inv + half;
           pt[i][1] = poly[i][1] * inv + yoff;
         }
-        Scan(h, pt, m, za[h], zb[h], zc[h], r);
+        Scan(h, pt, m, za[h], zb[h], zc[h], r, false);
       }
     }
   };

@@ -131,12 +131,12 @@ class Hemicube {
   // wholly behind the shooter, outside the face or behind its buffer.
   uint32_t Visible(const glm::dvec3& lo, const glm::dvec3& hi);
   bool Open(int h, int xa, int xb, int ra, int rb, float zt);
-  bool Skip(int h, const float (*pt)[2], int n, float za, float zb, float zc);
+  bool Hidden(int h, float x0, float x1, float y0, float y1, float za, float zb, float zc);
   // Its vertices into the shooter's frame, its leaves into the buffers of
   // the hemicube faces in `mask`; adds to clock's stages when non-null.
   void DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock);
   void Scan(int face, const float (*pt)[2], int n, float za, float zb, float zc,
-            int32_t rank);
+            int32_t rank, bool cull);
 
   int res_;
   bool culling_ = true;
