@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <string_view>
 
 #include <glm/vec3.hpp>
 
@@ -98,7 +99,7 @@ class Reader {
  public:
   Reader(const char* data, size_t size, std::string* err)
       : p_(reinterpret_cast<const uint8_t*>(data)), size_(size), err_(err) {}
-  Reader(const std::string& s, std::string* err) : Reader(s.data(), s.size(), err) {}
+  Reader(std::string_view s, std::string* err) : Reader(s.data(), s.size(), err) {}
 
   bool ok() const { return ok_; }
   size_t left() const { return size_ - pos_; }

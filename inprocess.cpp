@@ -22,6 +22,7 @@ void InProcessTransport::Poll(double, std::vector<WorkerEvent>* events) {
   const proto::Assignment a = todo_.front();
   todo_.erase(todo_.begin());
   WorkerEvent ev{WorkerEvent::kColumn, 0, {}, ""};
+  ev.column.ff = Spare();
   ev.column.patch = a.patch;
   ev.column.k = a.k;
   const double t0 = MonotonicSeconds();

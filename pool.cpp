@@ -205,7 +205,7 @@ void WorkerPool::Flush(int w, std::vector<WorkerEvent>* events) {
   }
 }
 
-bool WorkerPool::Handle(int w, proto::Msg type, const std::string& payload,
+bool WorkerPool::Handle(int w, proto::Msg type, std::string_view payload,
                         std::vector<WorkerEvent>* events, std::string* why) {
   using proto::Msg;
   Worker& wk = workers_[w];
@@ -257,6 +257,7 @@ bool WorkerPool::Handle(int w, proto::Msg type, const std::string& payload,
     case State::kJoined: {
       if (type != Msg::kColumn) break;
       WorkerEvent ev{WorkerEvent::kColumn, w, {}, ""};
+      ev.column.ff = Spare();
       if (!proto::DecodeColumn(payload, &ev.column, &err)) { *why = "garbled column: " + err; return false; }
       // The decoder cannot know the mesh: ids from the wire index the
       // master's arrays, so they are checked here (ids increase: the last
@@ -291,7 +292,8 @@ void WorkerPool::Receive(int w, std::vector<WorkerEvent>* events) {
     wk.last_heard = Clk();
     wk.in.Append(buf, size_t(n));
     proto::Msg type;
-    std::string payload, err;
+    std::string_view payload;  // in wk.in's buffer: no copy of each column
+    std::string err;
     for (;;) {
       proto::FrameReader::Result r = wk.in.Next(&type, &payload, &err);
       if (r == proto::FrameReader::kNeedMore) break;

@@ -141,7 +141,7 @@ class WorkerPool : public Transport {
             bool ended = false);
   void Flush(int w, std::vector<WorkerEvent>* events);
   void Receive(int w, std::vector<WorkerEvent>* events);
-  bool Handle(int w, proto::Msg type, const std::string& payload,
+  bool Handle(int w, proto::Msg type, std::string_view payload,
               std::vector<WorkerEvent>* events, std::string* why);
   void Queue(int w, double now);
   double Clk() const;  // seconds since the pool was made

@@ -381,7 +381,7 @@ void EncodeError(const std::string& text, std::string* out) {
 
 // ---- decoders ---------------------------------------------------------
 
-bool DecodeHello(const std::string& payload, Hello* m, std::string* err) {
+bool DecodeHello(std::string_view payload, Hello* m, std::string* err) {
   Reader r(payload, err);
   uint64_t magic, version;
   if (!r.Fixed(4, &magic, "magic") || !r.Fixed(2, &version, "version")) return false;
@@ -408,7 +408,7 @@ bool DecodeHello(const std::string& payload, Hello* m, std::string* err) {
   return r.End("hello");
 }
 
-bool DecodeScene(const std::string& payload, SceneSetup* m, std::string* err) {
+bool DecodeScene(std::string_view payload, SceneSetup* m, std::string* err) {
   Reader r(payload, err);
   SceneSetup s;
   s.scene.objects = {"default"};
@@ -507,14 +507,14 @@ bool DecodeScene(const std::string& payload, SceneSetup* m, std::string* err) {
   return true;
 }
 
-bool DecodeReady(const std::string& payload, Ready* m, std::string* err) {
+bool DecodeReady(std::string_view payload, Ready* m, std::string* err) {
   Reader r(payload, err);
   if (!r.Fixed(8, &m->elements, "element count") || !r.Fixed(8, &m->mesh_hash, "mesh hash"))
     return false;
   return r.End("ready");
 }
 
-bool DecodeWork(const std::string& payload, std::vector<Assignment>* m, std::string* err) {
+bool DecodeWork(std::string_view payload, std::vector<Assignment>* m, std::string* err) {
   Reader r(payload, err);
   uint64_t n;
   if (!r.Count(2, &n, "assignment count")) return false;
@@ -539,11 +539,11 @@ bool DecodeColumn(const char* data, size_t size, Column* m, std::string* err) {
   return GetFormFactors(&r, &m->ff);
 }
 
-bool DecodeColumn(const std::string& payload, Column* m, std::string* err) {
+bool DecodeColumn(std::string_view payload, Column* m, std::string* err) {
   return DecodeColumn(payload.data(), payload.size(), m, err);
 }
 
-bool DecodeDivide(const std::string& payload, std::vector<int32_t>* m, std::string* err) {
+bool DecodeDivide(std::string_view payload, std::vector<int32_t>* m, std::string* err) {
   Reader r(payload, err);
   uint64_t n;
   if (!r.Count(1, &n, "element count")) return false;
@@ -558,7 +558,7 @@ bool DecodeDivide(const std::string& payload, std::vector<int32_t>* m, std::stri
   return true;
 }
 
-bool DecodeError(const std::string& payload, std::string* text, std::string* err) {
+bool DecodeError(std::string_view payload, std::string* text, std::string* err) {
   Reader r(payload, err);
   uint64_t n;
   std::string t;
@@ -578,16 +578,40 @@ bool DecodeError(const std::string& payload, std::string* text, std::string* err
 
 // ---- framing ----------------------------------------------------------
 
+// Drops what has been read once it is half the buffer: each byte is moved
+// at most once on average, and a long stream does not grow memory. Done
+// before the buffer next changes rather than after a frame is handed out,
+// so that a payload's view stays valid until then.
+void FrameReader::Compact() {
+  if (pos_ == buf_.size()) {
+    buf_.clear();
+    pos_ = 0;
+    if (buf_.capacity() > (size_t{1} << 20)) buf_.shrink_to_fit();
+  } else if (pos_ > buf_.size() / 2) {
+    buf_.erase(0, pos_);
+    pos_ = 0;
+  }
+}
+
 void FrameReader::Append(const char* data, size_t n) {
   if (bad_) return;  // nothing more will be read: do not keep it
+  Compact();
   buf_.append(data, n);
 }
 
 FrameReader::Result FrameReader::Next(Msg* type, std::string* payload, std::string* err) {
+  std::string_view view;
+  const Result r = Next(type, &view, err);
+  if (r == kFrame) payload->assign(view.data(), view.size());
+  return r;
+}
+
+FrameReader::Result FrameReader::Next(Msg* type, std::string_view* payload, std::string* err) {
   if (bad_) {
     *err = "the stream is unusable after an earlier bad frame";
     return kBad;
   }
+  Compact();
   if (buffered() < kHeaderSize) return kNeedMore;
   const unsigned char* h = reinterpret_cast<const unsigned char*>(buf_.data() + pos_);
   const uint32_t len = uint32_t(h[0]) | uint32_t(h[1]) << 8 | uint32_t(h[2]) << 16 |
@@ -609,18 +633,8 @@ FrameReader::Result FrameReader::Next(Msg* type, std::string* payload, std::stri
                " payload bytes is longer than the limit of " + std::to_string(MaxPayload(t)));
   if (buffered() - kHeaderSize < len) return kNeedMore;
   *type = t;
-  payload->assign(buf_, pos_ + kHeaderSize, len);
+  *payload = std::string_view(buf_.data() + pos_ + kHeaderSize, len);
   pos_ += kHeaderSize + len;
-  // Drop what has been read once it is half the buffer: each byte is moved
-  // at most once on average, and a long stream does not grow memory.
-  if (pos_ == buf_.size()) {
-    buf_.clear();
-    pos_ = 0;
-    if (buf_.capacity() > (size_t{1} << 20)) buf_.shrink_to_fit();
-  } else if (pos_ > buf_.size() / 2) {
-    buf_.erase(0, pos_);
-    pos_ = 0;
-  }
   return kFrame;
 }
 

@@ -489,12 +489,13 @@ bool Scheduler::Exhausted() {
 // shots.
 void Scheduler::ShootNext() {
   const double t0 = MonotonicSeconds();
-  const proto::Column c = std::move(ready_.front().column);
+  proto::Column c = std::move(ready_.front().column);
   Slot* from = ready_.front().from >= 0 ? &slots_[size_t(ready_.front().from)] : nullptr;
   ready_.pop_front();
   if (from) --from->waiting;
   solver_->Shoot(c.patch, c.ff);
   solver_->Release(c.patch);
+  t_->Recycle(std::move(c.ff));
   ++r_.columns;
   unshot_ = solver_->UnshotFraction();
   r_.shoot_s += MonotonicSeconds() - t0;

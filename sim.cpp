@@ -242,9 +242,11 @@ void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
         ++wk.columns;
         reader_.Append(ev.frame.data(), ev.frame.size());
         proto::Msg type;
-        std::string payload, err;
+        std::string_view payload;
+        std::string err;
         CHECK(reader_.Next(&type, &payload, &err) == proto::FrameReader::kFrame);
         WorkerEvent out{WorkerEvent::kColumn, ev.worker, {}, ""};
+        out.column.ff = Spare();
         CHECK(type == proto::Msg::kColumn && proto::DecodeColumn(payload, &out.column, &err));
         events->push_back(std::move(out));
         break;

@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
     Subdivider sub(&mesh, so);
     proto::Column got;
     proto::FrameReader reader;
-    std::string payload;
+    std::string_view payload;
     double sel = 0, dec = 0, sho = 0;
     covered = 0;
     const double cpu0 = ThreadCpuSeconds(), wall0 = MonotonicSeconds();

@@ -757,6 +757,40 @@ TEST(Protocol, FrameReaderKeepsUpWithALongStream) {
   EXPECT_GT(frames, 0u);
 }
 
+TEST(Protocol, FrameReaderViewStaysValidUntilTheNextCall) {
+  // A whole column and part of the next in the buffer: the first column's
+  // payload handed out as a view is still its bytes when read after Next
+  // returned (had the reader moved the rest of the buffer over it then,
+  // as it may before its next call, the view would see the next frame).
+  proto::Column a, b;
+  a.patch = 1;
+  b.patch = 2;
+  for (int32_t e = 0; e < 300; ++e) a.ff.push_back({2 * e, 0.001f * float(e + 1)});
+  for (int32_t e = 0; e < 900; ++e) b.ff.push_back({e, 0.002f});
+  std::string fa, fb;
+  proto::EncodeColumn(a, &fa);
+  proto::EncodeColumn(b, &fb);
+  const std::string stream = fa + fb;
+  FrameReader r;
+  r.Append(stream.data(), fa.size() + 10);
+  Msg t;
+  std::string_view view;
+  std::string err;
+  ASSERT_EQ(r.Next(&t, &view, &err), FrameReader::kFrame) << err;
+  EXPECT_EQ(t, Msg::kColumn);
+  EXPECT_EQ(view, std::string_view(fa).substr(proto::kHeaderSize));
+  EXPECT_EQ(r.Next(&t, &view, &err), FrameReader::kNeedMore);
+  // Then the rest: the next frame whole, as the copying Next gives it.
+  r.Append(stream.data() + fa.size() + 10, fb.size() - 10);
+  ASSERT_EQ(r.Next(&t, &view, &err), FrameReader::kFrame) << err;
+  EXPECT_EQ(view, std::string_view(fb).substr(proto::kHeaderSize));
+  proto::Column got;
+  ASSERT_TRUE(proto::DecodeColumn(view, &got, &err)) << err;
+  EXPECT_EQ(got.patch, 2);
+  EXPECT_EQ(got.ff.size(), b.ff.size());
+  EXPECT_EQ(r.buffered(), 0u);
+}
+
 // ---- garbage --------------------------------------------------------------
 
 // Checks what a decoder accepted: the values are in range and encoding them

@@ -178,6 +178,36 @@ TEST(Scheduler, QueuesStayWithinTheHighMark) {
   EXPECT_EQ(r.columns, r.shots);
 }
 
+// A recycled form factor list is where the next column goes (no new
+// storage), and the column is what a fresh list gets.
+TEST(Scheduler, RecycledColumnStorageGetsTheSameColumn) {
+  const glm::dvec3 dark(0.0);
+  Scene s = Box(1.0, {glm::dvec3(0.7)}, {glm::dvec3(1.0), dark, dark, dark, dark, dark});
+  Mesh m = MakeMesh(s);
+  InProcessTransport in(m, 32, false, 1);
+  std::vector<WorkerEvent> ev;
+  in.Poll(0, &ev);  // joined
+  ASSERT_EQ(ev.size(), 1u);
+  in.Assign(0, {0, 0});
+  in.Poll(0, &ev);
+  ASSERT_EQ(ev.size(), 2u);
+  const std::vector<FormFactor> fresh = ev[1].column.ff;
+  ASSERT_FALSE(fresh.empty());
+  // Stale contents and a larger size than the column: none of it shows.
+  std::vector<FormFactor> old(fresh.size() + 50, FormFactor{7, 0.5f});
+  const FormFactor* const storage = old.data();
+  in.Recycle(std::move(old));
+  in.Assign(0, {0, 0});
+  in.Poll(0, &ev);
+  ASSERT_EQ(ev.size(), 3u);
+  EXPECT_EQ(ev[2].column.ff.data(), storage);
+  ASSERT_EQ(ev[2].column.ff.size(), fresh.size());
+  for (size_t i = 0; i < fresh.size(); ++i) {
+    EXPECT_EQ(ev[2].column.ff[i].elem, fresh[i].elem);
+    EXPECT_EQ(ev[2].column.ff[i].f, fresh[i].f);
+  }
+}
+
 // The same answer as the sequential run, and every assignment shot once.
 TEST(Scheduler, LostWorkerLosesNothing) {
   const glm::dvec3 dark(0.0);
