@@ -424,6 +424,41 @@ TEST(FfCodec, ColumnPayloadsOutOfRangeAreRefused) {
 }
 
 
+TEST(FfCodec, ABadRunAfterGoodOnesGetsItsOwnOneLineError) {
+  // 200 good runs of one id (ids 0, 2, ..., 398: the decoder's quick
+  // loop), then a bad one: the message its own check gives, exactly.
+  // Payload: patch, k (1 byte each), two f64, n and the run count (2
+  // bytes each: 201), then 2 bytes a run: run 200 is at offset 422.
+  auto column = [](uint64_t gap, uint64_t len1) {
+    std::vector<std::pair<uint64_t, uint64_t>> runs(200, {1, 0});
+    runs[0].first = 0;
+    runs.push_back({gap, len1});
+    return RawColumn(201, runs, std::vector<uint64_t>(201, 1));
+  };
+  proto::Column d;
+  std::string err;
+  ASSERT_TRUE(proto::DecodeColumn(column(1, 0), &d, &err)) << err;
+  ASSERT_EQ(d.ff.size(), 201u);
+  EXPECT_EQ(d.ff.back().elem, 400);
+  auto why = [&](const std::string& p) {
+    err.clear();
+    EXPECT_FALSE(proto::DecodeColumn(p, &d, &err));
+    return err;
+  };
+  EXPECT_EQ(why(column(0, 0)),
+            "run 200 at offset 422 has gap 0: it continues the previous run (runs must be maximal)");
+  EXPECT_EQ(why(column(1, 1)), "run 200 at offset 422 makes 202 ids, more than the 201 form factors");
+  EXPECT_EQ(why(column(uint64_t(INT32_MAX) - 398, 0)),
+            "run 200 at offset 422: element id 2147483648 is out of range (max 2147483647)");
+  EXPECT_EQ(why(column(uint64_t(INT32_MAX) + 1, 0)),
+            "run gap 2147483648 is out of range (max 2147483647)");
+  EXPECT_EQ(why(column(1, uint64_t(INT32_MAX) + 1)),
+            "run length - 1 2147483648 is out of range (max 2147483647)");
+  const std::string good = column(1, 0);
+  EXPECT_EQ(why(good.substr(0, 422) + std::string("\x81\x00", 2) + good.substr(423)),
+            "varint run gap at offset 422 is not in its shortest form");
+}
+
 TEST(FfCodec, ColumnMutationsGiveCleanErrorsOrCanonicalColumns) {
   // Columns with and without escapes (the decoder's two paths), bytes
   // changed, inserted, removed: a clean error, or a column that is valid
