@@ -106,6 +106,22 @@ inline std::pair<int, int> Rows(float y0, float y1, int H) {
   return {std::max(0, Ceil(std::max(y0, -lim) - 0.5f)), std::min(H, Ceil(std::min(y1, lim) - 0.5f))};
 }
 
+// Whether a polygon of fewer than 9 rows, its x in [x0, x1], holds no
+// pixel centre across, 0 <= x < R. Scan's edge crossings lie in [x0, x1]
+// but for float rounding (a few 2^-24 of |x| and of the width) and 16.16
+// steps (under 2^-16 a row, 9 rows at most): m is far above both. No pixel
+// centre i + 1/2 in [x0 - m, x1 + m], 0 <= i < R: no pixel lies between
+// crossings. Monotone in the box (m only grows with it), so that what holds
+// for a face's pixel box holds for each of its leaves' (DrawFace).
+inline bool NoPixelCentre(float x0, float x1, int R) {
+  const double m = 0x1p-10 + 0x1p-20 * (std::max(std::abs(x0), std::abs(x1)) + (x1 - x0));
+  const double lo = std::clamp(double(x0) - m - 0.5, -2.0, R + 2.0);
+  const double hi = std::clamp(double(x1) + m - 0.5, -2.0, R + 2.0);
+  const int first = std::max(0, int(lo + 2) - 2 + (int(lo + 2) - 2 < lo));  // ceil(lo)
+  const int last = std::min(R - 1, int(hi + 2) - 2);                         // floor(hi)
+  return first > last;
+}
+
 // 16.16 fixed point for edge crossings: rows then step by one integer add,
 // and ceil is a shift. |v| is kept below 1e9 pixels.
 inline int64_t Fixed(float v) {
@@ -261,18 +277,7 @@ bool Hemicube::Hidden(int h, float x0, float x1, float y0, float y1, float za, f
                       float zc) {
   constexpr double kHiddenArea = 64;
   const int R = res_, H = h == 0 ? R : R / 2;
-  if (y1 - y0 < 8) {
-    // Scan's edge crossings lie in [x0, x1] but for float rounding (a few
-    // 2^-24 of |x| and of the width) and 16.16 steps (under 2^-16 a row,
-    // 9 rows at most here): m is far above both. No pixel centre i + 1/2
-    // in [x0 - m, x1 + m], 0 <= i < R: no pixel lies between crossings.
-    const double m = 0x1p-10 + 0x1p-20 * (std::max(std::abs(x0), std::abs(x1)) + (x1 - x0));
-    const double lo = std::clamp(double(x0) - m - 0.5, -2.0, R + 2.0);
-    const double hi = std::clamp(double(x1) + m - 0.5, -2.0, R + 2.0);
-    const int first = std::max(0, int(lo + 2) - 2 + (int(lo + 2) - 2 < lo));  // ceil(lo)
-    const int last = std::min(R - 1, int(hi + 2) - 2);                         // floor(hi)
-    if (first > last) return true;
-  }
+  if (y1 - y0 < 8 && NoPixelCentre(x0, x1, R)) return true;
   if (!(double(x1 - x0) * double(y1 - y0) >= kHiddenArea)) return false;
   const int xa = std::max(0, int(std::floor(std::max(x0, -2.0f))) - 1);
   const int xb = std::min(R, int(std::ceil(std::min(x1, R + 2.0f))) + 1);
@@ -353,7 +358,18 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
   for (int i = cf.vb; i < cf.ve; ++i) put(mesh.verts[i]);
   if (cf.nd)
     for (int i : mesh.faces[cf.face].divide_verts) put(mesh.verts[i]);
-  for (int i = 0; i < nv; ++i) code_[i] = Outcodes(lx[i], ly[i], lz[i], near_);
+  uint32_t all = ~0u, any = 0;
+  for (int i = 0; i < nv; ++i) {
+    code_[i] = Outcodes(lx[i], ly[i], lz[i], near_);
+    all &= code_[i];
+    any |= code_[i];
+  }
+  // A hemicube face all its vertices lie outside one plane of gets none of
+  // its leaves (each leaf's outline is of these vertices).
+  for (uint32_t todo = mask; todo; todo &= todo - 1) {
+    const int h = __builtin_ctz(todo);
+    if ((all >> (5 * h)) & 31) mask &= ~(1u << h);
+  }
   // Pixel coordinates on the faces it may reach, from one reciprocal per
   // face pair (the faces look along z, ±x, ±y). Used only where the vertex
   // is past the near plane, so a division by 0 elsewhere is harmless.
@@ -378,6 +394,24 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
       sy_[3][i] = lz[i] * iy;
       sx_[4][i] = -lx[i] * iy + half;
       sy_[4][i] = -lz[i] * iy;
+    }
+  // Nor does one where the face's pixel box, all in front of the near
+  // plane, holds no pixel centre: Scan finds none in any leaf's box, which
+  // lies within it (Rows and NoPixelCentre only grow with the box). A
+  // finely cut face smaller than a pixel or two costs its vertices only.
+  if (culling_)
+    for (uint32_t todo = mask; todo; todo &= todo - 1) {
+      const int h = __builtin_ctz(todo);
+      if ((any >> (5 * h)) & kNear) continue;
+      float x0 = sx_[h][0], x1 = x0, y0 = sy_[h][0], y1 = y0;
+      for (int i = 1; i < nv; ++i) {
+        x0 = std::min(x0, sx_[h][i]);
+        x1 = std::max(x1, sx_[h][i]);
+        y0 = std::min(y0, sy_[h][i]);
+        y1 = std::max(y1, sy_[h][i]);
+      }
+      const auto [ya, yb] = Rows(y0, y1, h == 0 ? res_ : res_ / 2);
+      if (ya >= yb || (y1 - y0 < 8 && NoPixelCentre(x0, x1, res_))) mask &= ~(1u << h);
     }
   if (clock) {  // culling and transform so far, the rest is raster
     const double now = MonotonicSeconds();
@@ -463,8 +497,12 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
       }
     }
   };
-  if (wide_) leaves(outline_wide_.data());
-  else leaves(outline_.data());
+  if (!mask) {  // none of its leaves reaches a pixel: nothing to draw
+  } else if (wide_) {
+    leaves(outline_wide_.data());
+  } else {
+    leaves(outline_.data());
+  }
   visited_ += cf.le - cf.lb;
   if (clock) {
     const double now = MonotonicSeconds();
