@@ -600,6 +600,13 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       const Node &l = nodes_[at + 1], &r = nodes_[nd.right];
       auto dist = [&](const Node& x) { return glm::length(0.5 * (x.lo + x.hi) - c_); };
       const bool left_first = dist(l) <= dist(r);
+      // Their children are read when they are popped (to order theirs):
+      // ask for them now, a hierarchy level ahead; right children lie far.
+      if (l.right >= 0) __builtin_prefetch(&nodes_[l.right]);
+      if (r.right >= 0) {
+        __builtin_prefetch(&nodes_[nd.right + 1]);
+        __builtin_prefetch(&nodes_[r.right]);
+      }
       stack_.push_back(left_first ? nd.right : at + 1);
       stack_.push_back(left_first ? at + 1 : nd.right);
     }
