@@ -574,15 +574,6 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       const uint32_t mask = Visible(nd.lo, nd.hi);
       if (!mask) continue;
       if (nd.right < 0) {
-        // The next leaf popped (most often this one's sibling) has its
-        // faces asked for now, a leaf's drawing before they are read: at
-        // 10^6 elements they are far from the cache.
-        if (!stack_.empty() && nodes_[stack_.back()].right < 0) {
-          const Node& next = nodes_[stack_.back()];
-          const char* a = reinterpret_cast<const char*>(&faces_[next.first]);
-          const char* b = reinterpret_cast<const char*>(&faces_[next.first + next.count]);
-          for (; a < b; a += 64) __builtin_prefetch(a);
-        }
         // The faces' vertices lie in mesh order, not the hierarchy's, and
         // the outlines in rank order: ask for all of them at once rather
         // than wait for each face's in turn.
@@ -600,12 +591,20 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       const Node &l = nodes_[at + 1], &r = nodes_[nd.right];
       auto dist = [&](const Node& x) { return glm::length(0.5 * (x.lo + x.hi) - c_); };
       const bool left_first = dist(l) <= dist(r);
-      // Their children are read when they are popped (to order theirs):
-      // ask for them now, a hierarchy level ahead; right children lie far.
+      // Their children are read when they are popped (to order theirs),
+      // and a leaf child's faces when it is drawn: ask for them now, a
+      // hierarchy level ahead (right children lie far; at 10^6 elements
+      // nodes and faces are far from the cache).
       if (l.right >= 0) __builtin_prefetch(&nodes_[l.right]);
       if (r.right >= 0) {
         __builtin_prefetch(&nodes_[nd.right + 1]);
         __builtin_prefetch(&nodes_[r.right]);
+      }
+      for (const Node* x : {&l, &r}) {
+        if (x->right >= 0) continue;
+        const char* a = reinterpret_cast<const char*>(&faces_[x->first]);
+        const char* b = reinterpret_cast<const char*>(&faces_[x->first + x->count]);
+        for (; a < b; a += 64) __builtin_prefetch(a);
       }
       stack_.push_back(left_first ? nd.right : at + 1);
       stack_.push_back(left_first ? at + 1 : nd.right);
