@@ -645,6 +645,10 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
           ends |= uint64_t(it[base + k + 1] != it[base + k]) << k;
       }
       if (base + len == R) ends |= uint64_t(1) << (len - 1);
+      // The elements' ids of the runs that start in this block are asked
+      // for before the first is summed: ranks lie scattered over elem_.
+      for (uint64_t e = ends; e; e &= e - 1)
+        __builtin_prefetch(&elem_[std::max(it[base + __builtin_ctzll(e) + 1], 0)]);
       while (ends) {
         const int x1 = base + __builtin_ctzll(ends) + 1;
         ends &= ends - 1;
