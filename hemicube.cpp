@@ -90,12 +90,18 @@ Hemicube::Hemicube(int resolution) : res_(resolution) {
 
 namespace {
 
-// ceil(v) for |v| < 2^30 without a libm call (baseline x86-64 has no
-// rounding instruction). Callers keep v in range: projected points are
-// bounded by the near plane.
-inline int Ceil(float v) {
+// ceil(v) and floor(v), float or double, for |v| < 2^30 without a libm
+// call (baseline x86-64 has no rounding instruction). Callers keep v in
+// range: projected points are bounded by the near plane, Visible's clamped.
+template <class T>
+inline int Ceil(T v) {
   const int i = int(v);
-  return i + (float(i) < v);
+  return i + (T(i) < v);
+}
+template <class T>
+inline int Floor(T v) {
+  const int i = int(v);
+  return i - (v < T(i));
 }
 
 // The pixel rows a polygon spanning [y0, y1] in y covers on a hemicube
@@ -333,10 +339,10 @@ uint32_t Hemicube::Visible(const glm::dvec3& lo, const glm::dvec3& hi) {
     auto px = [&](double v, double off, double lim) {
       return std::clamp(v * half + off, -1.0, lim + 1.0);
     };
-    const int xa = std::max(0, int(std::floor(px(a0 / (a0 >= 0 ? d1 : d0), half, R))) - 1);
-    const int xb = std::min(R, int(std::ceil(px(a1 / (a1 >= 0 ? d0 : d1), half, R))) + 1);
-    const int ra = std::max(0, int(std::floor(px(b0 / (b0 >= 0 ? d1 : d0), ya, rows))) - 1);
-    const int rb = std::min(int(rows), int(std::ceil(px(b1 / (b1 >= 0 ? d0 : d1), ya, rows))) + 1);
+    const int xa = std::max(0, Floor(px(a0 / (a0 >= 0 ? d1 : d0), half, R)) - 1);
+    const int xb = std::min(R, Ceil(px(a1 / (a1 >= 0 ? d0 : d1), half, R)) + 1);
+    const int ra = std::max(0, Floor(px(b0 / (b0 >= 0 ? d1 : d0), ya, rows)) - 1);
+    const int rb = std::min(int(rows), Ceil(px(b1 / (b1 >= 0 ? d0 : d1), ya, rows)) + 1);
     if (xa >= xb || ra >= rb) continue;  // between pixel centres
     if (Open(h, xa, xb, ra, rb, float(1.001 / d0))) mask |= 1u << h;
   }
