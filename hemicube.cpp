@@ -90,12 +90,18 @@ Hemicube::Hemicube(int resolution) : res_(resolution) {
 
 namespace {
 
-// ceil(v) for |v| < 2^30 without a libm call (baseline x86-64 has no
-// rounding instruction). Callers keep v in range: projected points are
-// bounded by the near plane.
-inline int Ceil(float v) {
+// ceil(v) and floor(v), float or double, for |v| < 2^30 without a libm
+// call (baseline x86-64 has no rounding instruction). Callers keep v in
+// range: projected points are bounded by the near plane, Visible's clamped.
+template <class T>
+inline int Ceil(T v) {
   const int i = int(v);
-  return i + (float(i) < v);
+  return i + (T(i) < v);
+}
+template <class T>
+inline int Floor(T v) {
+  const int i = int(v);
+  return i - (v < T(i));
 }
 
 // The pixel rows a polygon spanning [y0, y1] in y covers on a hemicube
@@ -104,6 +110,22 @@ inline int Ceil(float v) {
 inline std::pair<int, int> Rows(float y0, float y1, int H) {
   const float lim = 1e9f;  // keeps Ceil in range; far outside any face
   return {std::max(0, Ceil(std::max(y0, -lim) - 0.5f)), std::min(H, Ceil(std::min(y1, lim) - 0.5f))};
+}
+
+// Whether a polygon of fewer than 9 rows, its x in [x0, x1], holds no
+// pixel centre across, 0 <= x < R. Scan's edge crossings lie in [x0, x1]
+// but for float rounding (a few 2^-24 of |x| and of the width) and 16.16
+// steps (under 2^-16 a row, 9 rows at most): m is far above both. No pixel
+// centre i + 1/2 in [x0 - m, x1 + m], 0 <= i < R: no pixel lies between
+// crossings. Monotone in the box (m only grows with it), so that what holds
+// for a face's pixel box holds for each of its leaves' (DrawFace).
+inline bool NoPixelCentre(float x0, float x1, int R) {
+  const double m = 0x1p-10 + 0x1p-20 * (std::max(std::abs(x0), std::abs(x1)) + (x1 - x0));
+  const double lo = std::clamp(double(x0) - m - 0.5, -2.0, R + 2.0);
+  const double hi = std::clamp(double(x1) + m - 0.5, -2.0, R + 2.0);
+  const int first = std::max(0, int(lo + 2) - 2 + (int(lo + 2) - 2 < lo));  // ceil(lo)
+  const int last = std::min(R - 1, int(hi + 2) - 2);                         // floor(hi)
+  return first > last;
 }
 
 // 16.16 fixed point for edge crossings: rows then step by one integer add,
@@ -261,18 +283,7 @@ bool Hemicube::Hidden(int h, float x0, float x1, float y0, float y1, float za, f
                       float zc) {
   constexpr double kHiddenArea = 64;
   const int R = res_, H = h == 0 ? R : R / 2;
-  if (y1 - y0 < 8) {
-    // Scan's edge crossings lie in [x0, x1] but for float rounding (a few
-    // 2^-24 of |x| and of the width) and 16.16 steps (under 2^-16 a row,
-    // 9 rows at most here): m is far above both. No pixel centre i + 1/2
-    // in [x0 - m, x1 + m], 0 <= i < R: no pixel lies between crossings.
-    const double m = 0x1p-10 + 0x1p-20 * (std::max(std::abs(x0), std::abs(x1)) + (x1 - x0));
-    const double lo = std::clamp(double(x0) - m - 0.5, -2.0, R + 2.0);
-    const double hi = std::clamp(double(x1) + m - 0.5, -2.0, R + 2.0);
-    const int first = std::max(0, int(lo + 2) - 2 + (int(lo + 2) - 2 < lo));  // ceil(lo)
-    const int last = std::min(R - 1, int(hi + 2) - 2);                         // floor(hi)
-    if (first > last) return true;
-  }
+  if (y1 - y0 < 8 && NoPixelCentre(x0, x1, R)) return true;
   if (!(double(x1 - x0) * double(y1 - y0) >= kHiddenArea)) return false;
   const int xa = std::max(0, int(std::floor(std::max(x0, -2.0f))) - 1);
   const int xb = std::min(R, int(std::ceil(std::min(x1, R + 2.0f))) + 1);
@@ -328,10 +339,10 @@ uint32_t Hemicube::Visible(const glm::dvec3& lo, const glm::dvec3& hi) {
     auto px = [&](double v, double off, double lim) {
       return std::clamp(v * half + off, -1.0, lim + 1.0);
     };
-    const int xa = std::max(0, int(std::floor(px(a0 / (a0 >= 0 ? d1 : d0), half, R))) - 1);
-    const int xb = std::min(R, int(std::ceil(px(a1 / (a1 >= 0 ? d0 : d1), half, R))) + 1);
-    const int ra = std::max(0, int(std::floor(px(b0 / (b0 >= 0 ? d1 : d0), ya, rows))) - 1);
-    const int rb = std::min(int(rows), int(std::ceil(px(b1 / (b1 >= 0 ? d0 : d1), ya, rows))) + 1);
+    const int xa = std::max(0, Floor(px(a0 / (a0 >= 0 ? d1 : d0), half, R)) - 1);
+    const int xb = std::min(R, Ceil(px(a1 / (a1 >= 0 ? d0 : d1), half, R)) + 1);
+    const int ra = std::max(0, Floor(px(b0 / (b0 >= 0 ? d1 : d0), ya, rows)) - 1);
+    const int rb = std::min(int(rows), Ceil(px(b1 / (b1 >= 0 ? d0 : d1), ya, rows)) + 1);
     if (xa >= xb || ra >= rb) continue;  // between pixel centres
     if (Open(h, xa, xb, ra, rb, float(1.001 / d0))) mask |= 1u << h;
   }
@@ -353,7 +364,18 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
   for (int i = cf.vb; i < cf.ve; ++i) put(mesh.verts[i]);
   if (cf.nd)
     for (int i : mesh.faces[cf.face].divide_verts) put(mesh.verts[i]);
-  for (int i = 0; i < nv; ++i) code_[i] = Outcodes(lx[i], ly[i], lz[i], near_);
+  uint32_t all = ~0u, any = 0;
+  for (int i = 0; i < nv; ++i) {
+    code_[i] = Outcodes(lx[i], ly[i], lz[i], near_);
+    all &= code_[i];
+    any |= code_[i];
+  }
+  // A hemicube face all its vertices lie outside one plane of gets none of
+  // its leaves (each leaf's outline is of these vertices).
+  for (uint32_t todo = mask; todo; todo &= todo - 1) {
+    const int h = __builtin_ctz(todo);
+    if ((all >> (5 * h)) & 31) mask &= ~(1u << h);
+  }
   // Pixel coordinates on the faces it may reach, from one reciprocal per
   // face pair (the faces look along z, ±x, ±y). Used only where the vertex
   // is past the near plane, so a division by 0 elsewhere is harmless.
@@ -378,6 +400,24 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
       sy_[3][i] = lz[i] * iy;
       sx_[4][i] = -lx[i] * iy + half;
       sy_[4][i] = -lz[i] * iy;
+    }
+  // Nor does one where the face's pixel box, all in front of the near
+  // plane, holds no pixel centre: Scan finds none in any leaf's box, which
+  // lies within it (Rows and NoPixelCentre only grow with the box). A
+  // finely cut face smaller than a pixel or two costs its vertices only.
+  if (culling_)
+    for (uint32_t todo = mask; todo; todo &= todo - 1) {
+      const int h = __builtin_ctz(todo);
+      if ((any >> (5 * h)) & kNear) continue;
+      float x0 = sx_[h][0], x1 = x0, y0 = sy_[h][0], y1 = y0;
+      for (int i = 1; i < nv; ++i) {
+        x0 = std::min(x0, sx_[h][i]);
+        x1 = std::max(x1, sx_[h][i]);
+        y0 = std::min(y0, sy_[h][i]);
+        y1 = std::max(y1, sy_[h][i]);
+      }
+      const auto [ya, yb] = Rows(y0, y1, h == 0 ? res_ : res_ / 2);
+      if (ya >= yb || (y1 - y0 < 8 && NoPixelCentre(x0, x1, res_))) mask &= ~(1u << h);
     }
   if (clock) {  // culling and transform so far, the rest is raster
     const double now = MonotonicSeconds();
@@ -463,8 +503,12 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
       }
     }
   };
-  if (wide_) leaves(outline_wide_.data());
-  else leaves(outline_.data());
+  if (!mask) {  // none of its leaves reaches a pixel: nothing to draw
+  } else if (wide_) {
+    leaves(outline_wide_.data());
+  } else {
+    leaves(outline_.data());
+  }
   visited_ += cf.le - cf.lb;
   if (clock) {
     const double now = MonotonicSeconds();
@@ -536,15 +580,6 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       const uint32_t mask = Visible(nd.lo, nd.hi);
       if (!mask) continue;
       if (nd.right < 0) {
-        // The next leaf popped (most often this one's sibling) has its
-        // faces asked for now, a leaf's drawing before they are read: at
-        // 10^6 elements they are far from the cache.
-        if (!stack_.empty() && nodes_[stack_.back()].right < 0) {
-          const Node& next = nodes_[stack_.back()];
-          const char* a = reinterpret_cast<const char*>(&faces_[next.first]);
-          const char* b = reinterpret_cast<const char*>(&faces_[next.first + next.count]);
-          for (; a < b; a += 64) __builtin_prefetch(a);
-        }
         // The faces' vertices lie in mesh order, not the hierarchy's, and
         // the outlines in rank order: ask for all of them at once rather
         // than wait for each face's in turn.
@@ -562,6 +597,21 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       const Node &l = nodes_[at + 1], &r = nodes_[nd.right];
       auto dist = [&](const Node& x) { return glm::length(0.5 * (x.lo + x.hi) - c_); };
       const bool left_first = dist(l) <= dist(r);
+      // Their children are read when they are popped (to order theirs),
+      // and a leaf child's faces when it is drawn: ask for them now, a
+      // hierarchy level ahead (right children lie far; at 10^6 elements
+      // nodes and faces are far from the cache).
+      if (l.right >= 0) __builtin_prefetch(&nodes_[l.right]);
+      if (r.right >= 0) {
+        __builtin_prefetch(&nodes_[nd.right + 1]);
+        __builtin_prefetch(&nodes_[r.right]);
+      }
+      for (const Node* x : {&l, &r}) {
+        if (x->right >= 0) continue;
+        const char* a = reinterpret_cast<const char*>(&faces_[x->first]);
+        const char* b = reinterpret_cast<const char*>(&faces_[x->first + x->count]);
+        for (; a < b; a += 64) __builtin_prefetch(a);
+      }
       stack_.push_back(left_first ? nd.right : at + 1);
       stack_.push_back(left_first ? at + 1 : nd.right);
     }
@@ -601,6 +651,10 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
           ends |= uint64_t(it[base + k + 1] != it[base + k]) << k;
       }
       if (base + len == R) ends |= uint64_t(1) << (len - 1);
+      // The elements' ids of the runs that start in this block are asked
+      // for before the first is summed: ranks lie scattered over elem_.
+      for (uint64_t e = ends; e; e &= e - 1)
+        __builtin_prefetch(&elem_[std::max(it[base + __builtin_ctzll(e) + 1], 0)]);
       while (ends) {
         const int x1 = base + __builtin_ctzll(ends) + 1;
         ends &= ends - 1;

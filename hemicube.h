@@ -18,7 +18,8 @@
 // outside every hemicube face, or behind the depths already drawn (a
 // kTile-pixel tile's least depth, then pixels); so is a leaf that covers
 // 64 pixels or more, before it is scanned, and one whose pixel box holds
-// no pixel centre (a finely cut scene's many). So a column costs about
+// no pixel centre (a finely cut scene's many; all of a face's leaves at
+// once where the face's own pixel box holds none). So a column costs about
 // its visible faces and its pixels, not the scene: the maze or a room of
 // boxes leaves most of its elements unread. The item buffer holds leaf
 // ranks (their order in the flat copy), which break depth ties as the
