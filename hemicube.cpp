@@ -487,7 +487,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
     for (int m : group->members) self_faces_.push_back(mesh.patches[m].face);
     std::sort(self_faces_.begin(), self_faces_.end());
   }
-  const glm::dvec3 c = group ? group->center : sp.center;
+  const glm::dvec3 c = group ? group->center : mesh.Center(shooter);
   const glm::dvec3 n = group ? group->normal : sf.normal;
   // Any tangent will do; the face's first edge keeps it stable per face.
   const Element& e0 = mesh.elems[size_t(mesh.Tops(shooter)[0])];

@@ -45,15 +45,12 @@ struct Element {
   uint8_t level = 0;                       // 0..12 (--max-level)
   // Mesh::tverts holds T-vertices on its edges: few elements have any, so
   // they are kept beside the elements, not in each (40 bytes, not 56).
+  // Its area is apart too (Mesh::elem_area), which a worker does not keep.
   bool tverts = false;
-  // double, as are vertices, normals and offsets: a 1e4 sliver or a scene
-  // at 1e-4 or 1e4 must keep its areas and planes; the solver divides by
-  // areas (ρ/A) and sums B·A over 1e6 : 1e-6 light ranges.
-  double area = 0.0;
   bool IsTriangle() const { return v[3] < 0; }
   bool IsLeaf() const { return first_child < 0; }
 };
-static_assert(sizeof(Element) == 40, "README, Memory: bytes per element");
+static_assert(sizeof(Element) == 32, "README, Memory: bytes per element");
 
 // Ids in one of the mesh's flat arrays, [first, last): a patch's top
 // elements, a surface's scene faces (Mesh::Tops, Mesh::SceneFaces).
@@ -73,9 +70,10 @@ struct Patch {
   // block: 48 bytes a patch less).
   int32_t tops_at = 0, tops = 0;
   int32_t next_piece = -1;       // the face's next patch SplitPatch appended, or -1
-  double area = 0.0;
-  glm::dvec3 center{0.0};        // area centroid: where the hemicube sits
+  // Its area and centre are apart (Mesh::patch_area, Mesh::Center): a
+  // worker keeps neither.
 };
+static_assert(sizeof(Patch) == 16, "README, Memory: bytes per patch");
 
 // A surface (surface.h): one input face, or adjacent coplanar faces of
 // one material joined into a convex polygon.
@@ -171,6 +169,16 @@ struct Mesh {
   std::vector<Element> elems;
   std::vector<Patch> patches;
   std::vector<MeshFace> faces;
+  // What only the master reads (the solver, subdivision, groups, the
+  // results), apart from Element and Patch so that a worker need not keep
+  // it (KeepColumnsOnly): 8 bytes an element and 32 a patch. double, as
+  // are vertices, normals and offsets: a 1e4 sliver or a scene at 1e-4 or
+  // 1e4 must keep its areas and planes; the solver divides by areas (ρ/A)
+  // and sums B·A over 1e6 : 1e-6 light ranges.
+  std::vector<double> elem_area;         // per element: ElementArea
+  std::vector<double> patch_area;        // per patch: Σ its top elements' areas
+  std::vector<glm::dvec3> patch_center;  // per patch: see Center
+  bool columns_only = false;             // KeepColumnsOnly ran
   // The patches' top elements, patch by patch (Patch::tops_at), and the
   // surfaces' scene faces (MeshFace::scene_at). A split patch keeps its
   // first slot for its first piece; its other pieces are appended.
@@ -251,6 +259,17 @@ struct Mesh {
     return tverts.at(elem);
   }
   glm::dvec3 Centroid(int elem) const;
+  // A patch's centre, where the hemicube sits: a piece SplitPatch made
+  // has its top element's centroid, other patches their top elements'
+  // area centroid. Kept in patch_center; computed again, to the bit, once
+  // KeepColumnsOnly freed it (a worker needs only those it shoots).
+  glm::dvec3 Center(int patch) const;
+  // Frees what only the master reads: the areas, the patch centres, the
+  // links back to the scene's faces (face_scene, corner_begin,
+  // face_corners), and the group index per patch where no groups formed
+  // (an empty one reads alike: GroupOf, SplitPieces). Divide and
+  // SplitPatch do not fill them from then on. The columns are the same.
+  void KeepColumnsOnly();
 };
 
 // Builds the mesh. Fails (false, *err) only when limits are exceeded, e.g.

@@ -31,8 +31,8 @@ void Cover(const Mesh& mesh, const ElemB& elem_b, const PlaneFrame& frame,
     mesh.LeavesUnder(e, &leaves);
     const double share = el.IsLeaf() ? part / whole : 1.0;
     for (int l : leaves) {
-      *sum += elem_b[l] * (mesh.elems[l].area * share);
-      *area += mesh.elems[l].area * share;
+      *sum += elem_b[l] * (mesh.elem_area[size_t(l)] * share);
+      *area += mesh.elem_area[size_t(l)] * share;
     }
     return;
   }
@@ -52,8 +52,8 @@ std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const ElemB& elem_b) {
       for (int p : mesh.FacePatches(mf)) {
         mesh.Leaves(p, &leaves);
         for (int e : leaves) {
-          sum += elem_b[e] * mesh.elems[e].area;
-          area += mesh.elems[e].area;
+          sum += elem_b[e] * mesh.elem_area[size_t(e)];
+          area += mesh.elem_area[size_t(e)];
         }
       }
       if (area > 0) out[scene_faces[0]] = glm::max(sum / area, glm::dvec3(0.0));
@@ -399,8 +399,8 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
       const glm::dvec3 b = glm::max(elem_b[size_t(e)], glm::dvec3(0.0));
       for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
         const int l = local(el.v[k]);
-        sum[size_t(l)] += b * el.area;
-        w[size_t(l)] += el.area;
+        sum[size_t(l)] += b * mesh.elem_area[size_t(e)];
+        w[size_t(l)] += mesh.elem_area[size_t(e)];
       }
     }
     auto put = [&](int v) {
@@ -528,9 +528,9 @@ void FieldError(const Mesh& mesh, const ElemB& elem_b, const Mesh& ref,
     }
     const glm::dvec3 want = Drawn(ref, ref_shaded, int(r), x, n);
     const glm::dvec3 d = Drawn(mesh, shaded, e, x, n) - want;
-    se += rel.area * glm::dot(d, d) / 3;
-    mean += rel.area * (want.r + want.g + want.b) / 3;
-    area += rel.area;
+    se += ref.elem_area[r] * glm::dot(d, d) / 3;
+    mean += ref.elem_area[r] * (want.r + want.g + want.b) / 3;
+    area += ref.elem_area[r];
   }
   *rms = area > 0 ? std::sqrt(se / area) : 0;
   *rel_rms = mean > 0 ? *rms / (mean / area) : 0;
