@@ -160,7 +160,12 @@ void SetMid(Mesh* m, int n, int p, int q, int v) {
 int AddVertex(Mesh* m, int face, int a, int b, const glm::dvec3& p) {
   const int v = int(m->verts.size());
   m->verts.push_back(p);
-  m->faces[face].divide_verts.push_back(v);
+  MeshFace& f = m->faces[size_t(face)];
+  if (f.divided_at < 0) {
+    f.divided_at = int32_t(m->divide_verts.size());
+    m->divide_verts.emplace_back();
+  }
+  m->divide_verts[size_t(f.divided_at)].push_back(v);
   m->out_head.push_back(-1);
   m->split.push_back(a < 0 ? kNoEdge : Undirected(a, b));
   return v;

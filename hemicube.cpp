@@ -352,7 +352,7 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
   };
   for (int i = cf.vb; i < cf.ve; ++i) put(mesh.verts[i]);
   if (cf.nd)
-    for (int i : mesh.faces[cf.face].divide_verts) put(mesh.verts[i]);
+    for (int i : mesh.DivideVerts(mesh.faces[cf.face])) put(mesh.verts[i]);
   for (int i = 0; i < nv; ++i) code_[i] = Outcodes(lx[i], ly[i], lz[i], near_);
   // Pixel coordinates on the faces it may reach, from one reciprocal per
   // face pair (the faces look along z, ±x, ±y). Used only where the vertex

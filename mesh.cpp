@@ -294,6 +294,8 @@ bool Build(const Scene& scene, const std::vector<Surface>& surfaces,
   // written cost no memory): growing by doubling wrote every array two or
   // three times over, most of BuildMesh's time at 10^6 faces.
   mesh->faces.reserve(surfaces.size());
+  mesh->face_scene_at.reserve(surfaces.size() + 1);
+  mesh->face_scene_at.push_back(0);
   mesh->elems.reserve(size_t(estimate));
   mesh->elem_area.reserve(size_t(estimate));
   mesh->verts.reserve(size_t(vertices));
@@ -321,12 +323,10 @@ bool Build(const Scene& scene, const std::vector<Surface>& surfaces,
   for (size_t s = 0; s < surfaces.size(); ++s) {
     const Surface& f = surfaces[s];
     MeshFace mf;
-    mf.scene_at = int32_t(mesh->face_scene.size());
-    mf.scenes = int32_t(f.faces.size());
     mesh->face_scene.insert(mesh->face_scene.end(), f.faces.begin(), f.faces.end());
+    mesh->face_scene_at.push_back(int32_t(mesh->face_scene.size()));
     mf.normal = f.normal;
     mf.material = f.material;
-    mf.area = f.area;
     mf.offset = f.offset;
     int face = int(mesh->faces.size());
     mesh->faces.push_back(std::move(mf));
@@ -428,7 +428,7 @@ glm::dvec3 Mesh::Center(int patch) const {
 void Mesh::KeepColumnsOnly() {
   columns_only = true;
   FreeStorage(&elem_area), FreeStorage(&patch_area), FreeStorage(&patch_center);
-  FreeStorage(&face_scene), FreeStorage(&corner_begin), FreeStorage(&face_corners);
+  FreeStorage(&face_scene), FreeStorage(&face_scene_at), FreeStorage(&corner_begin), FreeStorage(&face_corners);
   if (groups.empty()) FreeStorage(&group_of);
 }
 

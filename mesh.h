@@ -78,21 +78,22 @@ static_assert(sizeof(Patch) == 16, "README, Memory: bytes per patch");
 // A surface (surface.h): one input face, or adjacent coplanar faces of
 // one material joined into a convex polygon.
 struct MeshFace {
-  // The Scene::faces it covers, ascending: Mesh::face_scene[scene_at,
-  // scene_at + scenes) (Mesh::SceneFaces).
-  int32_t scene_at = 0, scenes = 0;
-  int material = 0;              // Scene::materials and Mesh::materials index
   int vbegin = 0, vend = 0;      // its vertices: Mesh::verts[vbegin, vend)
   // Its patches (Mesh::FacePatches): BuildMesh's, Mesh::patches[patch_at,
   // patch_at + built), then those SplitPatch appended, first_piece to
   // last_piece by Patch::next_piece (not a vector a face and its heap
   // block: 40 bytes a face less).
   int32_t patch_at = 0, built = 0, first_piece = -1, last_piece = -1;
+  int material = 0;              // Scene::materials and Mesh::materials index
+  // The vertices Divide() added to it (Mesh::DivideVerts): its list in
+  // Mesh::divide_verts, or -1 while it has none (most faces; a vector in
+  // every face was 24 bytes). Its scene faces are apart (Mesh::SceneFaces),
+  // which a worker does not keep: one cache line a face, not 104 bytes.
+  int32_t divided_at = -1;
   glm::dvec3 normal{0.0};
-  double area = 0.0;
   double offset = 0.0;           // plane: dot(normal, x) == offset
-  std::vector<int> divide_verts; // the vertices Divide() added since
 };
+static_assert(sizeof(MeshFace) == 64, "README, Memory: bytes per face");
 
 // A face's patches in order, BuildMesh's then SplitPatch's pieces:
 // for (int p : mesh.FacePatches(face)).
@@ -180,10 +181,16 @@ struct Mesh {
   std::vector<glm::dvec3> patch_center;  // per patch: see Center
   bool columns_only = false;             // KeepColumnsOnly ran
   // The patches' top elements, patch by patch (Patch::tops_at), and the
-  // surfaces' scene faces (MeshFace::scene_at). A split patch keeps its
+  // surfaces' scene faces (face_scene_at). A split patch keeps its
   // first slot for its first piece; its other pieces are appended.
   std::vector<int32_t> patch_tops;
   std::vector<int32_t> face_scene;
+  // Per face and one more: face f's scene faces are face_scene[
+  // face_scene_at[f], face_scene_at[f + 1]) (SceneFaces; master only).
+  std::vector<int32_t> face_scene_at;
+  // The vertices Divide() added to a face, per face that has any
+  // (MeshFace::divided_at; DivideVerts), in the order it added them.
+  std::vector<std::vector<int>> divide_verts;
   // Per Scene::materials index: Kd and Ke, looked up through
   // MeshFace::material (Rho, Emission) rather than 48 bytes in every face.
   struct Material {
@@ -243,8 +250,12 @@ struct Mesh {
   FacePatchIds FacePatches(const MeshFace& f) const {
     return {&patches, f.patch_at, f.patch_at + f.built, f.first_piece};
   }
-  IdSpan SceneFaces(const MeshFace& f) const {
-    return {face_scene.data() + f.scene_at, face_scene.data() + f.scene_at + f.scenes};
+  IdSpan SceneFaces(size_t face) const {
+    return {face_scene.data() + face_scene_at[face], face_scene.data() + face_scene_at[face + 1]};
+  }
+  const std::vector<int>& DivideVerts(const MeshFace& f) const {
+    static const std::vector<int> kNone;
+    return f.divided_at < 0 ? kNone : divide_verts[size_t(f.divided_at)];
   }
   // Leaf elements of a patch, in a stable order.
   void Leaves(int patch, std::vector<int>* out) const;

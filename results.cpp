@@ -44,8 +44,9 @@ void Cover(const Mesh& mesh, const ElemB& elem_b, const PlaneFrame& frame,
 std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const ElemB& elem_b) {
   std::vector<glm::dvec3> out(mesh.corner_begin.size() - 1, glm::dvec3(0.0));
   std::vector<int> leaves;
-  for (const MeshFace& mf : mesh.faces) {
-    const IdSpan scene_faces = mesh.SceneFaces(mf);
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const MeshFace& mf = mesh.faces[f];
+    const IdSpan scene_faces = mesh.SceneFaces(f);
     if (scene_faces.size() == 1) {  // all its leaves, in patch order
       glm::dvec3 sum(0.0);
       double area = 0;
@@ -311,7 +312,7 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
   std::vector<int> face_of(mesh.verts.size(), -1);
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     for (int v = mesh.faces[f].vbegin; v < mesh.faces[f].vend; ++v) face_of[v] = int(f);
-    for (int v : mesh.faces[f].divide_verts) face_of[v] = int(f);
+    for (int v : mesh.DivideVerts(mesh.faces[f])) face_of[v] = int(f);
   }
   auto normal_key = [&](int v, int k) {
     return std::llround(mesh.faces[face_of[v]].normal[k] * 1e6);
@@ -346,7 +347,7 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
       }
     };
     for (int v = f.vbegin; v < f.vend; ++v) join(v);
-    for (int v : f.divide_verts) join(v);
+    for (int v : mesh.DivideVerts(f)) join(v);
   }
   std::vector<int>().swap(first);
   std::vector<int>().swap(face_of);
@@ -386,12 +387,11 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
     }
     std::sort(leaves.begin(), leaves.end());
     const int own = f.vend - f.vbegin;
+    const std::vector<int>& dv = mesh.DivideVerts(f);
     auto local = [&](int v) {
-      return v < f.vend ? v - f.vbegin
-                        : own + int(std::lower_bound(f.divide_verts.begin(), f.divide_verts.end(), v) -
-                                    f.divide_verts.begin());
+      return v < f.vend ? v - f.vbegin : own + int(std::lower_bound(dv.begin(), dv.end(), v) - dv.begin());
     };
-    const size_t n = size_t(own) + f.divide_verts.size();
+    const size_t n = size_t(own) + dv.size();
     sum.assign(n, glm::dvec3(0.0));
     w.assign(n, 0.0);
     for (int e : leaves) {
@@ -413,7 +413,7 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
       }
     };
     for (int v = f.vbegin; v < f.vend; ++v) put(v);
-    for (int v : f.divide_verts) put(v);
+    for (int v : dv) put(v);
   }
   std::vector<glm::dvec3> gsum(njoined, glm::dvec3(0.0));
   std::vector<double> gw(njoined, 0.0);
