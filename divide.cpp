@@ -287,7 +287,6 @@ void Divide(Mesh* mesh, int32_t elem) {
     Element child;
     child.v = kv;
     child.patch = parent.patch;
-    child.parent = elem;
     child.level = parent.level + 1;
     // A neighbour already finer than the parent by two levels leaves a
     // T-vertex on the child's edge (the subdivision policy avoids it).
@@ -300,7 +299,10 @@ void Divide(Mesh* mesh, int32_t elem) {
       if (c < n && (k == c || Next(k, n) == c)) mids[k] = MidpointOf(*mesh, kv[k], kv[Next(k, n)]);
     const int id = int(mesh->elems.size());
     mesh->elems.push_back(child);
-    if (!mesh->columns_only) mesh->elem_area.push_back(ElementArea(*mesh, child));
+    if (!mesh->columns_only) {
+      mesh->elem_area.push_back(ElementArea(*mesh, child));
+      mesh->parent.push_back(elem);
+    }
     for (int k = 0; k < n; ++k)
       if (mids[k] >= 0) PutMid(mesh, id, k, mids[k]);
     Link(mesh, id);

@@ -141,6 +141,7 @@ struct Builder {
     tops.push_back({patch - first_patch, int32_t(m->elems.size())});
     m->elems.push_back(e);
     m->elem_area.push_back(area);
+    m->parent.push_back(-1);
   }
 
   // The face's top elements into Mesh::patch_tops patch by patch, each
@@ -298,6 +299,7 @@ bool Build(const Scene& scene, const std::vector<Surface>& surfaces,
   mesh->face_scene_at.push_back(0);
   mesh->elems.reserve(size_t(estimate));
   mesh->elem_area.reserve(size_t(estimate));
+  mesh->parent.reserve(size_t(estimate));
   mesh->verts.reserve(size_t(vertices));
   mesh->patches.reserve(size_t(estimate) / size_t(epp * epp) + surfaces.size());
   mesh->corner_begin.assign(scene.faces.size() + 1, 0);
@@ -365,6 +367,13 @@ bool Build(const Scene& scene, const std::vector<Surface>& surfaces,
       }
     }
   }
+  // Then the emptied surfaces' array (some 18 bytes an element) and what
+  // was freed since the last trim, before the patches' areas and centres
+  // are made: standing beside the whole mesh they were a worker's peak.
+  if (consume) {
+    FreeStorage(consume);
+    ReturnFreeMemory();
+  }
 
   mesh->patch_area.resize(mesh->patches.size());
   mesh->patch_center.resize(mesh->patches.size());
@@ -427,7 +436,7 @@ glm::dvec3 Mesh::Center(int patch) const {
 
 void Mesh::KeepColumnsOnly() {
   columns_only = true;
-  FreeStorage(&elem_area), FreeStorage(&patch_area), FreeStorage(&patch_center);
+  FreeStorage(&elem_area), FreeStorage(&parent), FreeStorage(&patch_area), FreeStorage(&patch_center);
   FreeStorage(&face_scene), FreeStorage(&face_scene_at), FreeStorage(&corner_begin), FreeStorage(&face_corners);
   if (groups.empty()) FreeStorage(&group_of);
 }
@@ -466,11 +475,20 @@ uint64_t MeshHash(const Mesh& mesh) {
     h = Mix(h, Bits(v.y));
     h = Mix(h, Bits(v.z));
   }
+  // A mesh that keeps columns only has its parents again from the children.
+  std::vector<int32_t> parents;
+  if (mesh.columns_only) {
+    parents.assign(mesh.elems.size(), -1);
+    for (size_t i = 0; i < mesh.elems.size(); ++i)
+      for (int k = 0; k < kChildren && !mesh.elems[i].IsLeaf(); ++k)
+        parents[size_t(mesh.elems[i].first_child + k)] = int32_t(i);
+  }
+  const std::vector<int32_t>& parent = mesh.columns_only ? parents : mesh.parent;
   for (size_t i = 0; i < mesh.elems.size(); ++i) {
     const Element& e = mesh.elems[i];
     h = Mix(h, Int(e.v[0]) | Int(e.v[1]) << 32);
     h = Mix(h, Int(e.v[2]) | Int(e.v[3]) << 32);
-    h = Mix(h, Int(e.patch) | Int(e.parent) << 32);
+    h = Mix(h, Int(e.patch) | Int(parent[i]) << 32);
     h = Mix(h, Int(e.first_child) | Int(e.level) << 32);
     h = Mix(h, Bits(mesh.columns_only ? ElementArea(mesh, e) : mesh.elem_area[i]));
   }

@@ -40,17 +40,17 @@ constexpr int kChildren = 4;
 struct Element {
   std::array<int, 4> v{{-1, -1, -1, -1}};  // vertex ids, CCW; v[3] < 0: triangle
   int patch = -1;                          // owning patch
-  int parent = -1;                         // -1: made by BuildMesh
   int first_child = -1;                    // -1: a leaf (a receiver)
   uint8_t level = 0;                       // 0..12 (--max-level)
   // Mesh::tverts holds T-vertices on its edges: few elements have any, so
   // they are kept beside the elements, not in each (40 bytes, not 56).
-  // Its area is apart too (Mesh::elem_area), which a worker does not keep.
+  // Its area and parent are apart too (Mesh::elem_area, Mesh::parent),
+  // which a worker does not keep.
   bool tverts = false;
   bool IsTriangle() const { return v[3] < 0; }
   bool IsLeaf() const { return first_child < 0; }
 };
-static_assert(sizeof(Element) == 32, "README, Memory: bytes per element");
+static_assert(sizeof(Element) == 28, "README, Memory: bytes per element");
 
 // Ids in one of the mesh's flat arrays, [first, last): a patch's top
 // elements, a surface's scene faces (Mesh::Tops, Mesh::SceneFaces).
@@ -172,11 +172,12 @@ struct Mesh {
   std::vector<MeshFace> faces;
   // What only the master reads (the solver, subdivision, groups, the
   // results), apart from Element and Patch so that a worker need not keep
-  // it (KeepColumnsOnly): 8 bytes an element and 32 a patch. double, as
+  // it (KeepColumnsOnly): 12 bytes an element and 32 a patch. double, as
   // are vertices, normals and offsets: a 1e4 sliver or a scene at 1e-4 or
   // 1e4 must keep its areas and planes; the solver divides by areas (ρ/A)
   // and sums B·A over 1e6 : 1e-6 light ranges.
   std::vector<double> elem_area;         // per element: ElementArea
+  std::vector<int32_t> parent;           // per element: -1 if made by BuildMesh
   std::vector<double> patch_area;        // per patch: Σ its top elements' areas
   std::vector<glm::dvec3> patch_center;  // per patch: see Center
   bool columns_only = false;             // KeepColumnsOnly ran
@@ -275,7 +276,7 @@ struct Mesh {
   // area centroid. Kept in patch_center; computed again, to the bit, once
   // KeepColumnsOnly freed it (a worker needs only those it shoots).
   glm::dvec3 Center(int patch) const;
-  // Frees what only the master reads: the areas, the patch centres, the
+  // Frees what only the master reads: the areas, parents, patch centres, the
   // links back to the scene's faces (face_scene, corner_begin,
   // face_corners), and the group index per patch where no groups formed
   // (an empty one reads alike: GroupOf, SplitPieces). Divide and
@@ -299,8 +300,9 @@ bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const M
                Mesh* mesh, std::string* err, const std::function<void()>& read = nullptr);
 // The same, consuming the surfaces: each one's polygon and faces are
 // freed once it is cut and given back to the system every few megabytes
-// (ReturnFreeMemory), so that they do not all stand beside the finished
-// mesh (a worker's peak: about 27 bytes an element at 10^6 elements).
+// (ReturnFreeMemory), and the array once all are cut, so that they do not
+// stand beside the finished mesh (a worker's peak: about 27 bytes an
+// element at 10^6 elements, and the array 18).
 bool BuildMesh(const Scene& scene, std::vector<Surface>&& surfaces, const MeshOptions& opts,
                Mesh* mesh, std::string* err, const std::function<void()>& read = nullptr);
 

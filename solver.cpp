@@ -147,7 +147,8 @@ void Solver::Grow() {
     const Element& el = mesh_.elems[e];
     patch_of_[e] = el.IsLeaf() ? el.patch : ~el.patch;
     elem_[e].area = mesh_.elem_area[e];
-    if (el.parent >= 0 && size_t(el.parent) < from) patch_of_[size_t(el.parent)] = ~el.patch;
+    const int parent = mesh_.parent[e];
+    if (parent >= 0 && size_t(parent) < from) patch_of_[size_t(parent)] = ~el.patch;
   }
   HugeArrays();
 }
@@ -495,7 +496,7 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
     for (int k = 0; k < kChildren; ++k) {
       LeafNeighbours(mesh_, pe.first_child + k, &nb);
       for (int n : nb)
-        if (mesh_.elems[n].parent != p && std::find(around.begin(), around.end(), n) == around.end())
+        if (mesh_.parent[size_t(n)] != p && std::find(around.begin(), around.end(), n) == around.end())
           around.push_back(n);
     }
     // Coordinates in the face's plane, about the children's area centroid.

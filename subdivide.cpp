@@ -77,7 +77,8 @@ void Subdivider::Track(const Mesh& mesh) {
     if (el.IsLeaf() && el.level < opts_.max_level && ShortestEdge(mesh, el) / 2 >= opts_.min_size)
       eligible_[e] |= kEligible;
     if (el.IsLeaf() && !(ke.r + ke.g + ke.b > 0)) eligible_[e] |= kLit;
-    if (el.parent >= 0 && size_t(el.parent) < from) eligible_[size_t(el.parent)] = 0;
+    const int parent = mesh.parent[e];
+    if (parent >= 0 && size_t(parent) < from) eligible_[size_t(parent)] = 0;
   }
 }
 

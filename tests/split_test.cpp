@@ -76,7 +76,7 @@ TEST(Split, AMeshKeepingColumnsOnlyGivesTheSameCentresAndColumns) {
   Divide(&master, master.Tops(1)[0]);
   Mesh worker = master;
   worker.KeepColumnsOnly();
-  EXPECT_TRUE(worker.elem_area.empty() && worker.patch_area.empty() &&
+  EXPECT_TRUE(worker.elem_area.empty() && worker.parent.empty() && worker.patch_area.empty() &&
               worker.patch_center.empty() && worker.face_scene.empty());
   EXPECT_EQ(MeshHash(worker), MeshHash(master));
   for (Mesh* m : {&master, &worker}) {
@@ -84,7 +84,8 @@ TEST(Split, AMeshKeepingColumnsOnlyGivesTheSameCentresAndColumns) {
     Divide(m, 3);
     SplitPatch(m, 2);
   }
-  EXPECT_TRUE(worker.elem_area.empty() && worker.patch_area.empty() && worker.patch_center.empty());
+  EXPECT_TRUE(worker.elem_area.empty() && worker.parent.empty() && worker.patch_area.empty() &&
+              worker.patch_center.empty());
   EXPECT_EQ(MeshHash(worker), MeshHash(master));
   ASSERT_EQ(worker.patches.size(), master.patches.size());
   Hemicube hm(64), hw(64);

@@ -59,7 +59,7 @@ TEST(Divide, QuadAndTriangleChildrenTileTheParent) {
     for (int k = 0; k < kChildren; ++k) {
       const Element& c = m.elems[p.first_child + k];
       EXPECT_EQ(c.level, 1);
-      EXPECT_EQ(c.parent, e);
+      EXPECT_EQ(m.parent[size_t(p.first_child + k)], e);
       EXPECT_EQ(c.patch, p.patch);
       EXPECT_EQ(c.IsTriangle(), p.IsTriangle());
       EXPECT_GT(m.elem_area[size_t(p.first_child + k)], 0);
