@@ -533,7 +533,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       const Node& nd = nodes_[stack_.back()];
       const int at = stack_.back();
       stack_.pop_back();
-      const uint32_t mask = Visible(nd.lo, nd.hi);
+      const uint32_t mask = Visible(nd.box.Lo(), nd.box.Hi());
       if (!mask) continue;
       if (nd.right < 0) {
         // The next leaf popped (most often this one's sibling) has its
@@ -560,7 +560,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
         continue;
       }
       const Node &l = nodes_[at + 1], &r = nodes_[nd.right];
-      auto dist = [&](const Node& x) { return glm::length(0.5 * (x.lo + x.hi) - c_); };
+      auto dist = [&](const Node& x) { return glm::length(0.5 * (x.box.Lo() + x.box.Hi()) - c_); };
       const bool left_first = dist(l) <= dist(r);
       stack_.push_back(left_first ? nd.right : at + 1);
       stack_.push_back(left_first ? at + 1 : nd.right);

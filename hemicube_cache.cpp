@@ -197,17 +197,17 @@ int Hemicube::BuildNodes(const Huge<FaceBox>& boxes, std::vector<int>* order,
   const int at = int(nodes_.size());
   nodes_.emplace_back();
   Node nd;
-  nd.lo = boxes[(*order)[first]].Lo();
-  nd.hi = boxes[(*order)[first]].Hi();
-  for (int i = first; i < first + count; ++i) {
-    nd.lo = glm::min(nd.lo, boxes[(*order)[i]].Lo());
-    nd.hi = glm::max(nd.hi, boxes[(*order)[i]].Hi());
-  }
+  nd.box = boxes[(*order)[first]];
+  for (int i = first; i < first + count; ++i)
+    for (int a = 0; a < 3; ++a) {
+      nd.box.lo[a] = std::min(nd.box.lo[a], boxes[(*order)[i]].lo[a]);
+      nd.box.hi[a] = std::max(nd.box.hi[a], boxes[(*order)[i]].hi[a]);
+    }
   if (count <= kLeafFaces) {
     nd.first = first;
     nd.count = count;
   } else {
-    const glm::dvec3 ext = nd.hi - nd.lo;
+    const glm::dvec3 ext = nd.box.Hi() - nd.box.Lo();
     const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : ext.y >= ext.z ? 1 : 2;
     const int mid = first + count / 2;
     std::nth_element(order->begin() + first, order->begin() + mid,
