@@ -427,9 +427,11 @@ void Mesh::LeavesUnder(int elem, std::vector<int>* out) const {
 
 glm::dvec3 Mesh::Center(int patch) const {
   if (!columns_only) return patch_center[size_t(patch)];
+  // A piece: one SplitPatch appended, or a split patch (its first piece).
+  // The split patches are few and this runs once a column.
   const IdSpan tops = Tops(patch);
   if (patch >= BuiltPatches() || std::find(splits.begin(), splits.end(), patch) != splits.end())
-    return Centroid(tops[0]);  // a piece: SplitPatch's
+    return Centroid(tops[0]);
   double area;
   return TopsCentroid(*this, patch, &area);
 }

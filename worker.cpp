@@ -257,11 +257,13 @@ int Worker::Run(std::string* err) {
   // Only the mesh is needed from here on: the scene (100-200 bytes a face)
   // is let go rather than kept for the whole run.
   setup.scene = Scene();
-  // The hash is of the mesh as the master has it, areas and centres too.
+  // Hashed while it has its areas and centres (without them MeshHash
+  // computes them again).
   const proto::Ready ready{mesh_.elems.size(), MeshHash(mesh_)};
-  // Nor what only the master reads: the areas, the patch centres (a
-  // column computes its shooter's: Mesh::Center), the links back to the
-  // scene's faces and, where no patches shoot together, the group index.
+  // Nor what only the master reads: the areas and parents, the patch
+  // centres (a column computes its shooter's: Mesh::Center), the links
+  // back to the scene's faces and, where no patches shoot together, the
+  // group index.
   mesh_.KeepColumnsOnly();
   // Its hundreds of thousands of small blocks freed go back to the system
   // (glibc keeps them otherwise), before the hemicube's arrays come.
