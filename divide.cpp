@@ -160,7 +160,12 @@ void SetMid(Mesh* m, int n, int p, int q, int v) {
 int AddVertex(Mesh* m, int face, int a, int b, const glm::dvec3& p) {
   const int v = int(m->verts.size());
   m->verts.push_back(p);
-  m->faces[face].divide_verts.push_back(v);
+  MeshFace& f = m->faces[size_t(face)];
+  if (f.divided_at < 0) {
+    f.divided_at = int32_t(m->divide_verts.size());
+    m->divide_verts.emplace_back();
+  }
+  m->divide_verts[size_t(f.divided_at)].push_back(v);
   m->out_head.push_back(-1);
   m->split.push_back(a < 0 ? kNoEdge : Undirected(a, b));
   return v;
@@ -282,9 +287,7 @@ void Divide(Mesh* mesh, int32_t elem) {
     Element child;
     child.v = kv;
     child.patch = parent.patch;
-    child.parent = elem;
     child.level = parent.level + 1;
-    child.area = ElementArea(*mesh, child);
     // A neighbour already finer than the parent by two levels leaves a
     // T-vertex on the child's edge (the subdivision policy avoids it).
     // Only on the parent's outline: child c < n has parent corner c at its
@@ -296,6 +299,10 @@ void Divide(Mesh* mesh, int32_t elem) {
       if (c < n && (k == c || Next(k, n) == c)) mids[k] = MidpointOf(*mesh, kv[k], kv[Next(k, n)]);
     const int id = int(mesh->elems.size());
     mesh->elems.push_back(child);
+    if (!mesh->columns_only) {
+      mesh->elem_area.push_back(ElementArea(*mesh, child));
+      mesh->parent.push_back(elem);
+    }
     for (int k = 0; k < n; ++k)
       if (mids[k] >= 0) PutMid(mesh, id, k, mids[k]);
     Link(mesh, id);

@@ -123,10 +123,10 @@ class Grouper {
       PatchGroup pg;
       pg.members = group;
       for (int q : group) {
-        const Patch& pa = m_.patches[q];
-        pg.area += pa.area;
-        pg.center += pa.area * pa.center;
-        pg.normal += pa.area * info_[q].n;
+        const double a = m_.patch_area[size_t(q)];
+        pg.area += a;
+        pg.center += a * m_.patch_center[size_t(q)];
+        pg.normal += a * info_[q].n;
       }
       pg.center /= pg.area;
       pg.normal = glm::normalize(pg.normal);
@@ -143,10 +143,10 @@ class Grouper {
       const IdSpan tops = m_.Tops(int(p));
       const MeshFace& f = m_.faces[pa.face];
       PatchInfo& in = info_[p];
-      in.c = pa.center;
+      in.c = m_.patch_center[p];
       in.n = f.normal;
       in.offset = f.offset;
-      in.lo = in.hi = pa.center;
+      in.lo = in.hi = in.c;
       in.corners_at = int32_t(corners_.size());
       for (int e : tops) {
         const Element& el = m_.elems[e];

@@ -363,7 +363,7 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
   };
   for (int i = cf.vb; i < cf.ve; ++i) put(mesh.verts[i]);
   if (cf.nd)
-    for (int i : mesh.faces[cf.face].divide_verts) put(mesh.verts[i]);
+    for (int i : mesh.DivideVerts(mesh.faces[cf.face])) put(mesh.verts[i]);
   uint32_t all = ~0u, any = 0;
   for (int i = 0; i < nv; ++i) {
     code_[i] = Outcodes(lx[i], ly[i], lz[i], near_);
@@ -531,7 +531,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
     for (int m : group->members) self_faces_.push_back(mesh.patches[m].face);
     std::sort(self_faces_.begin(), self_faces_.end());
   }
-  const glm::dvec3 c = group ? group->center : sp.center;
+  const glm::dvec3 c = group ? group->center : mesh.Center(shooter);
   const glm::dvec3 n = group ? group->normal : sf.normal;
   // Any tangent will do; the face's first edge keeps it stable per face.
   const Element& e0 = mesh.elems[size_t(mesh.Tops(shooter)[0])];
@@ -577,7 +577,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
       const Node& nd = nodes_[stack_.back()];
       const int at = stack_.back();
       stack_.pop_back();
-      const uint32_t mask = Visible(nd.lo, nd.hi);
+      const uint32_t mask = Visible(nd.box.Lo(), nd.box.Hi());
       if (!mask) continue;
       if (nd.right < 0) {
         // The faces' vertices lie in mesh order, not the hierarchy's, and
@@ -595,7 +595,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
         continue;
       }
       const Node &l = nodes_[at + 1], &r = nodes_[nd.right];
-      auto dist = [&](const Node& x) { return glm::length(0.5 * (x.lo + x.hi) - c_); };
+      auto dist = [&](const Node& x) { return glm::length(0.5 * (x.box.Lo() + x.box.Hi()) - c_); };
       const bool left_first = dist(l) <= dist(r);
       // Their children are read when they are popped (to order theirs),
       // and a leaf child's faces when it is drawn: ask for them now, a

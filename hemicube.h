@@ -105,10 +105,13 @@ class Hemicube {
     glm::dvec3 Hi() const { return glm::dvec3(hi[0], hi[1], hi[2]); }
   };
   struct Node {                   // of the hierarchy over faces, depth first
-    glm::dvec3 lo{0.0}, hi{0.0};
+    // Its faces' boxes' union: float as theirs are, so exactly (36 bytes
+    // a node, not 64 with a double box).
+    FaceBox box;
     int first = 0, count = 0;     // a leaf: faces_[first, first + count)
     int right = -1;               // an inner node: its second child (first is next)
   };
+  static_assert(sizeof(Node) == 36, "README, Memory: the hemicube cache");
   // The cache's arrays are read at scattered places and at 10^6 elements
   // are far larger than the TLB reaches in 4 KB pages (memory.h).
   template <class T>

@@ -86,7 +86,7 @@ void Hemicube::BuildCache(const Mesh& mesh) {
       hi = glm::max(hi, mesh.verts[i]);
     };
     for (int i = mf.vbegin; i < mf.vend; ++i) grow(i);
-    for (int i : mf.divide_verts) grow(i);
+    for (int i : mesh.DivideVerts(mf)) grow(i);
     FaceBox box;
     for (int a = 0; a < 3; ++a) {
       box.lo[a] = float(lo[a]);
@@ -137,7 +137,7 @@ void Hemicube::BuildCache(const Mesh& mesh) {
   size_t most = 0;
   for (const CacheFace& cf : faces_) {
     const MeshFace& mf = mesh.faces[cf.face];
-    most = std::max(most, size_t(mf.vend - mf.vbegin) + mf.divide_verts.size());
+    most = std::max(most, size_t(mf.vend - mf.vbegin) + mesh.DivideVerts(mf).size());
   }
   // 16 bits an index where they fit: 8 bytes an element less.
   wide_ = most > 65536;
@@ -150,12 +150,12 @@ void Hemicube::BuildCache(const Mesh& mesh) {
     const MeshFace& mf = mesh.faces[cf.face];
     cf.vb = mf.vbegin;
     cf.ve = mf.vend;
-    cf.nd = int(mf.divide_verts.size());
+    cf.nd = int(mesh.DivideVerts(mf).size());
     // Face-relative indices, in the order DrawFace transforms them: its
     // vertices, then its divide_verts, which keep the order of vertex ids
     // (Divide appends), as the near-plane clip needs to cut shared edges
     // alike; so a divide_vert's index is found by binary search.
-    const std::vector<int>& dv = mf.divide_verts;
+    const std::vector<int>& dv = mesh.DivideVerts(mf);
     CHECK(dv.empty() || dv.front() >= mf.vend);
     CHECK(std::adjacent_find(dv.begin(), dv.end(), std::greater_equal<int>()) == dv.end());
     cf.pb = int(at);
@@ -197,17 +197,17 @@ int Hemicube::BuildNodes(const Huge<FaceBox>& boxes, std::vector<int>* order,
   const int at = int(nodes_.size());
   nodes_.emplace_back();
   Node nd;
-  nd.lo = boxes[(*order)[first]].Lo();
-  nd.hi = boxes[(*order)[first]].Hi();
-  for (int i = first; i < first + count; ++i) {
-    nd.lo = glm::min(nd.lo, boxes[(*order)[i]].Lo());
-    nd.hi = glm::max(nd.hi, boxes[(*order)[i]].Hi());
-  }
+  nd.box = boxes[(*order)[first]];
+  for (int i = first; i < first + count; ++i)
+    for (int a = 0; a < 3; ++a) {
+      nd.box.lo[a] = std::min(nd.box.lo[a], boxes[(*order)[i]].lo[a]);
+      nd.box.hi[a] = std::max(nd.box.hi[a], boxes[(*order)[i]].hi[a]);
+    }
   if (count <= kLeafFaces) {
     nd.first = first;
     nd.count = count;
   } else {
-    const glm::dvec3 ext = nd.hi - nd.lo;
+    const glm::dvec3 ext = nd.box.Hi() - nd.box.Lo();
     const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : ext.y >= ext.z ? 1 : 2;
     const int mid = first + count / 2;
     std::nth_element(order->begin() + first, order->begin() + mid,

@@ -14,18 +14,21 @@
 
 // The master: mesh, solver, subdivision's adjacency, the hemicube (-j 0)
 // or the scene frame (with workers), the pictures at the end of a wave.
-// Measured at 1.06 M elements: 278 with -j 0 and 254 with -j 1 over 2
-// shots, but 456 and 462 in a first wave that divided and split 263,927
+// Measured at 1.06 M elements: 269 with -j 0 and 248 with -j 1 over 2
+// shots (278 and 254 at 55bde76), but 456 and 462 in a first wave that
+// divided and split 263,927
 // patches into 537,470 (its division pass: the adjacency, the solver
 // grown for the children and the pieces): the rate is that, with about
 // 13% room, since subdivision's limit (app.cpp) takes it as the cost of
 // every element.
 constexpr double kMasterBytesPerElement = 520;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
-// (measured 176 over 2 shots, at its columns: the mesh and the hemicube
-// cache; 210 to 242 once that pass's divisions and splits have come, its
-// hemicube cache rebuilt beside the adjacency).
-constexpr double kWorkerBytesPerElement = 275;
+// (measured 147 to 148 over 2 shots, at the end of BuildMesh's cutting
+// and at its columns; 170 to 187 once that pass's divisions and splits
+// have come, its hemicube cache rebuilt beside the adjacency): the
+// higher with about 13% room, as for the master (275 from 242 before
+// the mesh kept its master-only parts apart, Mesh::KeepColumnsOnly).
+constexpr double kWorkerBytesPerElement = 215;
 
 // Bytes this process may still use: physical memory, or less where
 // ulimit -v / -d or a cgroup's memory.max says so.

@@ -40,20 +40,17 @@ constexpr int kChildren = 4;
 struct Element {
   std::array<int, 4> v{{-1, -1, -1, -1}};  // vertex ids, CCW; v[3] < 0: triangle
   int patch = -1;                          // owning patch
-  int parent = -1;                         // -1: made by BuildMesh
   int first_child = -1;                    // -1: a leaf (a receiver)
   uint8_t level = 0;                       // 0..12 (--max-level)
   // Mesh::tverts holds T-vertices on its edges: few elements have any, so
   // they are kept beside the elements, not in each (40 bytes, not 56).
+  // Its area and parent are apart too (Mesh::elem_area, Mesh::parent),
+  // which a worker does not keep.
   bool tverts = false;
-  // double, as are vertices, normals and offsets: a 1e4 sliver or a scene
-  // at 1e-4 or 1e4 must keep its areas and planes; the solver divides by
-  // areas (ρ/A) and sums B·A over 1e6 : 1e-6 light ranges.
-  double area = 0.0;
   bool IsTriangle() const { return v[3] < 0; }
   bool IsLeaf() const { return first_child < 0; }
 };
-static_assert(sizeof(Element) == 40, "README, Memory: bytes per element");
+static_assert(sizeof(Element) == 28, "README, Memory: bytes per element");
 
 // Ids in one of the mesh's flat arrays, [first, last): a patch's top
 // elements, a surface's scene faces (Mesh::Tops, Mesh::SceneFaces).
@@ -73,28 +70,30 @@ struct Patch {
   // block: 48 bytes a patch less).
   int32_t tops_at = 0, tops = 0;
   int32_t next_piece = -1;       // the face's next patch SplitPatch appended, or -1
-  double area = 0.0;
-  glm::dvec3 center{0.0};        // area centroid: where the hemicube sits
+  // Its area and centre are apart (Mesh::patch_area, Mesh::Center): a
+  // worker keeps neither.
 };
+static_assert(sizeof(Patch) == 16, "README, Memory: bytes per patch");
 
 // A surface (surface.h): one input face, or adjacent coplanar faces of
 // one material joined into a convex polygon.
 struct MeshFace {
-  // The Scene::faces it covers, ascending: Mesh::face_scene[scene_at,
-  // scene_at + scenes) (Mesh::SceneFaces).
-  int32_t scene_at = 0, scenes = 0;
-  int material = 0;              // Scene::materials and Mesh::materials index
   int vbegin = 0, vend = 0;      // its vertices: Mesh::verts[vbegin, vend)
   // Its patches (Mesh::FacePatches): BuildMesh's, Mesh::patches[patch_at,
   // patch_at + built), then those SplitPatch appended, first_piece to
   // last_piece by Patch::next_piece (not a vector a face and its heap
   // block: 40 bytes a face less).
   int32_t patch_at = 0, built = 0, first_piece = -1, last_piece = -1;
+  int material = 0;              // Scene::materials and Mesh::materials index
+  // The vertices Divide() added to it (Mesh::DivideVerts): its list in
+  // Mesh::divide_verts, or -1 while it has none (most faces; a vector in
+  // every face was 24 bytes). Its scene faces are apart (Mesh::SceneFaces),
+  // which a worker does not keep: one cache line a face, not 104 bytes.
+  int32_t divided_at = -1;
   glm::dvec3 normal{0.0};
-  double area = 0.0;
   double offset = 0.0;           // plane: dot(normal, x) == offset
-  std::vector<int> divide_verts; // the vertices Divide() added since
 };
+static_assert(sizeof(MeshFace) == 64, "README, Memory: bytes per face");
 
 // A face's patches in order, BuildMesh's then SplitPatch's pieces:
 // for (int p : mesh.FacePatches(face)).
@@ -171,11 +170,28 @@ struct Mesh {
   std::vector<Element> elems;
   std::vector<Patch> patches;
   std::vector<MeshFace> faces;
+  // What only the master reads (the solver, subdivision, groups, the
+  // results), apart from Element and Patch so that a worker need not keep
+  // it (KeepColumnsOnly): 12 bytes an element and 32 a patch. double, as
+  // are vertices, normals and offsets: a 1e4 sliver or a scene at 1e-4 or
+  // 1e4 must keep its areas and planes; the solver divides by areas (ρ/A)
+  // and sums B·A over 1e6 : 1e-6 light ranges.
+  std::vector<double> elem_area;         // per element: ElementArea
+  std::vector<int32_t> parent;           // per element: -1 if made by BuildMesh
+  std::vector<double> patch_area;        // per patch: Σ its top elements' areas
+  std::vector<glm::dvec3> patch_center;  // per patch: see Center
+  bool columns_only = false;             // KeepColumnsOnly ran
   // The patches' top elements, patch by patch (Patch::tops_at), and the
-  // surfaces' scene faces (MeshFace::scene_at). A split patch keeps its
+  // surfaces' scene faces (face_scene_at). A split patch keeps its
   // first slot for its first piece; its other pieces are appended.
   std::vector<int32_t> patch_tops;
   std::vector<int32_t> face_scene;
+  // Per face and one more: face f's scene faces are face_scene[
+  // face_scene_at[f], face_scene_at[f + 1]) (SceneFaces; master only).
+  std::vector<int32_t> face_scene_at;
+  // The vertices Divide() added to a face, per face that has any
+  // (MeshFace::divided_at; DivideVerts), in the order it added them.
+  std::vector<std::vector<int>> divide_verts;
   // Per Scene::materials index: Kd and Ke, looked up through
   // MeshFace::material (Rho, Emission) rather than 48 bytes in every face.
   struct Material {
@@ -235,8 +251,12 @@ struct Mesh {
   FacePatchIds FacePatches(const MeshFace& f) const {
     return {&patches, f.patch_at, f.patch_at + f.built, f.first_piece};
   }
-  IdSpan SceneFaces(const MeshFace& f) const {
-    return {face_scene.data() + f.scene_at, face_scene.data() + f.scene_at + f.scenes};
+  IdSpan SceneFaces(size_t face) const {
+    return {face_scene.data() + face_scene_at[face], face_scene.data() + face_scene_at[face + 1]};
+  }
+  const std::vector<int>& DivideVerts(const MeshFace& f) const {
+    static const std::vector<int> kNone;
+    return f.divided_at < 0 ? kNone : divide_verts[size_t(f.divided_at)];
   }
   // Leaf elements of a patch, in a stable order.
   void Leaves(int patch, std::vector<int>* out) const;
@@ -251,6 +271,17 @@ struct Mesh {
     return tverts.at(elem);
   }
   glm::dvec3 Centroid(int elem) const;
+  // A patch's centre, where the hemicube sits: a piece SplitPatch made
+  // has its top element's centroid, other patches their top elements'
+  // area centroid. Kept in patch_center; computed again, to the bit, once
+  // KeepColumnsOnly freed it (a worker needs only those it shoots).
+  glm::dvec3 Center(int patch) const;
+  // Frees what only the master reads: the areas, parents, patch centres, the
+  // links back to the scene's faces (face_scene, corner_begin,
+  // face_corners), and the group index per patch where no groups formed
+  // (an empty one reads alike: GroupOf, SplitPieces). Divide and
+  // SplitPatch do not fill them from then on. The columns are the same.
+  void KeepColumnsOnly();
 };
 
 // Builds the mesh. Fails (false, *err) only when limits are exceeded, e.g.
@@ -269,8 +300,9 @@ bool BuildMesh(const Scene& scene, const std::vector<Surface>& surfaces, const M
                Mesh* mesh, std::string* err, const std::function<void()>& read = nullptr);
 // The same, consuming the surfaces: each one's polygon and faces are
 // freed once it is cut and given back to the system every few megabytes
-// (ReturnFreeMemory), so that they do not all stand beside the finished
-// mesh (a worker's peak: about 27 bytes an element at 10^6 elements).
+// (ReturnFreeMemory), and the array once all are cut, so that they do not
+// stand beside the finished mesh (a worker's peak: about 27 bytes an
+// element at 10^6 elements, and the array 18).
 bool BuildMesh(const Scene& scene, std::vector<Surface>&& surfaces, const MeshOptions& opts,
                Mesh* mesh, std::string* err, const std::function<void()>& read = nullptr);
 

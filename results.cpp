@@ -31,8 +31,8 @@ void Cover(const Mesh& mesh, const ElemB& elem_b, const PlaneFrame& frame,
     mesh.LeavesUnder(e, &leaves);
     const double share = el.IsLeaf() ? part / whole : 1.0;
     for (int l : leaves) {
-      *sum += elem_b[l] * (mesh.elems[l].area * share);
-      *area += mesh.elems[l].area * share;
+      *sum += elem_b[l] * (mesh.elem_area[size_t(l)] * share);
+      *area += mesh.elem_area[size_t(l)] * share;
     }
     return;
   }
@@ -44,16 +44,17 @@ void Cover(const Mesh& mesh, const ElemB& elem_b, const PlaneFrame& frame,
 std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const ElemB& elem_b) {
   std::vector<glm::dvec3> out(mesh.corner_begin.size() - 1, glm::dvec3(0.0));
   std::vector<int> leaves;
-  for (const MeshFace& mf : mesh.faces) {
-    const IdSpan scene_faces = mesh.SceneFaces(mf);
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const MeshFace& mf = mesh.faces[f];
+    const IdSpan scene_faces = mesh.SceneFaces(f);
     if (scene_faces.size() == 1) {  // all its leaves, in patch order
       glm::dvec3 sum(0.0);
       double area = 0;
       for (int p : mesh.FacePatches(mf)) {
         mesh.Leaves(p, &leaves);
         for (int e : leaves) {
-          sum += elem_b[e] * mesh.elems[e].area;
-          area += mesh.elems[e].area;
+          sum += elem_b[e] * mesh.elem_area[size_t(e)];
+          area += mesh.elem_area[size_t(e)];
         }
       }
       if (area > 0) out[scene_faces[0]] = glm::max(sum / area, glm::dvec3(0.0));
@@ -311,7 +312,7 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
   std::vector<int> face_of(mesh.verts.size(), -1);
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     for (int v = mesh.faces[f].vbegin; v < mesh.faces[f].vend; ++v) face_of[v] = int(f);
-    for (int v : mesh.faces[f].divide_verts) face_of[v] = int(f);
+    for (int v : mesh.DivideVerts(mesh.faces[f])) face_of[v] = int(f);
   }
   auto normal_key = [&](int v, int k) {
     return std::llround(mesh.faces[face_of[v]].normal[k] * 1e6);
@@ -346,7 +347,7 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
       }
     };
     for (int v = f.vbegin; v < f.vend; ++v) join(v);
-    for (int v : f.divide_verts) join(v);
+    for (int v : mesh.DivideVerts(f)) join(v);
   }
   std::vector<int>().swap(first);
   std::vector<int>().swap(face_of);
@@ -386,12 +387,11 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
     }
     std::sort(leaves.begin(), leaves.end());
     const int own = f.vend - f.vbegin;
+    const std::vector<int>& dv = mesh.DivideVerts(f);
     auto local = [&](int v) {
-      return v < f.vend ? v - f.vbegin
-                        : own + int(std::lower_bound(f.divide_verts.begin(), f.divide_verts.end(), v) -
-                                    f.divide_verts.begin());
+      return v < f.vend ? v - f.vbegin : own + int(std::lower_bound(dv.begin(), dv.end(), v) - dv.begin());
     };
-    const size_t n = size_t(own) + f.divide_verts.size();
+    const size_t n = size_t(own) + dv.size();
     sum.assign(n, glm::dvec3(0.0));
     w.assign(n, 0.0);
     for (int e : leaves) {
@@ -399,8 +399,8 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
       const glm::dvec3 b = glm::max(elem_b[size_t(e)], glm::dvec3(0.0));
       for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
         const int l = local(el.v[k]);
-        sum[size_t(l)] += b * el.area;
-        w[size_t(l)] += el.area;
+        sum[size_t(l)] += b * mesh.elem_area[size_t(e)];
+        w[size_t(l)] += mesh.elem_area[size_t(e)];
       }
     }
     auto put = [&](int v) {
@@ -413,7 +413,7 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
       }
     };
     for (int v = f.vbegin; v < f.vend; ++v) put(v);
-    for (int v : f.divide_verts) put(v);
+    for (int v : dv) put(v);
   }
   std::vector<glm::dvec3> gsum(njoined, glm::dvec3(0.0));
   std::vector<double> gw(njoined, 0.0);
@@ -528,9 +528,9 @@ void FieldError(const Mesh& mesh, const ElemB& elem_b, const Mesh& ref,
     }
     const glm::dvec3 want = Drawn(ref, ref_shaded, int(r), x, n);
     const glm::dvec3 d = Drawn(mesh, shaded, e, x, n) - want;
-    se += rel.area * glm::dot(d, d) / 3;
-    mean += rel.area * (want.r + want.g + want.b) / 3;
-    area += rel.area;
+    se += ref.elem_area[r] * glm::dot(d, d) / 3;
+    mean += ref.elem_area[r] * (want.r + want.g + want.b) / 3;
+    area += ref.elem_area[r];
   }
   *rms = area > 0 ? std::sqrt(se / area) : 0;
   *rel_rms = mean > 0 ? *rms / (mean / area) : 0;

@@ -60,7 +60,7 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
   for (size_t p = 0; p < mesh.patches.size(); ++p) {
     const MeshFace& f = mesh.faces[mesh.patches[p].face];
     const glm::dvec3& ke = mesh.Emission(f);
-    const double a = mesh.patches[p].area;
+    const double a = mesh.patch_area[p];
     total_area_ += a;
     emitted_ += (ke.r + ke.g + ke.b) * a;
     rho_area += mesh.Rho(f) * a;
@@ -88,9 +88,9 @@ void Solver::PatchArrays() {
     const glm::dvec3& rho = mesh_.Rho(face);
     patch_[p].material = face.material;
     patch_[p].group = mesh_.group_of.empty() ? -1 : mesh_.group_of[p];
-    patch_[p].area = mesh_.patches[p].area;
+    patch_[p].area = mesh_.patch_area[p];
     patch_[p].fsum = 0;
-    center_[p] = mesh_.patches[p].center;
+    center_[p] = mesh_.patch_center[p];
     weight_[p] = patch_[p].area * std::max({rho.r, rho.g, rho.b});
   }
   // A group's drift moves Σ of its members' powers: its key (members[0])
@@ -146,8 +146,9 @@ void Solver::Grow() {
   for (size_t e = from; e < n; ++e) {
     const Element& el = mesh_.elems[e];
     patch_of_[e] = el.IsLeaf() ? el.patch : ~el.patch;
-    elem_[e].area = el.area;
-    if (el.parent >= 0 && size_t(el.parent) < from) patch_of_[size_t(el.parent)] = ~el.patch;
+    elem_[e].area = mesh_.elem_area[e];
+    const int parent = mesh_.parent[e];
+    if (parent >= 0 && size_t(parent) < from) patch_of_[size_t(parent)] = ~el.patch;
   }
   HugeArrays();
 }
@@ -179,8 +180,8 @@ void Solver::Resum() {
   unshot_sum_ = glm::dvec3(0.0);
   abs_sum_ = 0;
   for (size_t p = 0; p < patch_.size(); ++p) {
-    unshot_sum_ += patch_[p].unshot * mesh_.patches[p].area;
-    abs_sum_ += Abs(patch_[p].unshot) * mesh_.patches[p].area;
+    unshot_sum_ += patch_[p].unshot * mesh_.patch_area[p];
+    abs_sum_ += Abs(patch_[p].unshot) * mesh_.patch_area[p];
   }
 }
 
@@ -495,7 +496,7 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
     for (int k = 0; k < kChildren; ++k) {
       LeafNeighbours(mesh_, pe.first_child + k, &nb);
       for (int n : nb)
-        if (mesh_.elems[n].parent != p && std::find(around.begin(), around.end(), n) == around.end())
+        if (mesh_.parent[size_t(n)] != p && std::find(around.begin(), around.end(), n) == around.end())
           around.push_back(n);
     }
     // Coordinates in the face's plane, about the children's area centroid.
@@ -508,8 +509,8 @@ void Solver::Divided(const std::vector<int32_t>& elems) {
     for (int k = 0; k < kChildren; ++k) {
       const int c = pe.first_child + k;
       cc[k] = mesh_.Centroid(c);
-      mean += mesh_.elems[c].area * cc[k];
-      area += mesh_.elems[c].area;
+      mean += mesh_.elem_area[size_t(c)] * cc[k];
+      area += mesh_.elem_area[size_t(c)];
     }
     mean /= area;
     // Least-squares gradient through the parent's value at `mean`, per
@@ -588,8 +589,8 @@ void Solver::Split(int p) {
   glm::dvec3 total(0.0);
   for (size_t i = 0; i < pieces.size(); ++i) {
     const int q = pieces[i];
-    patch_[size_t(q)].area = mesh_.patches[size_t(q)].area;
-    center_[size_t(q)] = mesh_.patches[size_t(q)].center;
+    patch_[size_t(q)].area = mesh_.patch_area[size_t(q)];
+    center_[size_t(q)] = mesh_.patch_center[size_t(q)];
     weight_[size_t(q)] = patch_[size_t(q)].area * std::max({kd.r, kd.g, kd.b});
     const IdSpan tops = mesh_.Tops(q);
     std::vector<int> stack(tops.begin(), tops.end());
@@ -603,7 +604,7 @@ void Solver::Split(int p) {
         continue;
       }
       patch_of_[size_t(e)] = q;
-      got[i] += glm::max(elem_[size_t(e)].b - ke, glm::dvec3(0.0)) * el.area;
+      got[i] += glm::max(elem_[size_t(e)].b - ke, glm::dvec3(0.0)) * mesh_.elem_area[size_t(e)];
     }
     total += got[i];
   }
@@ -702,7 +703,7 @@ double Solver::PowerRatio() const {
   double s = 0;
   for (size_t e = 0; e < elem_.size(); ++e) {
     const glm::dvec3& b = elem_[e].b;
-    if (mesh_.elems[e].IsLeaf()) s += (b.r + b.g + b.b) * mesh_.elems[e].area;
+    if (mesh_.elems[e].IsLeaf()) s += (b.r + b.g + b.b) * mesh_.elem_area[e];
   }
   return s / emitted_;
 }

@@ -52,6 +52,10 @@ void ReserveSplits(Mesh* mesh, const std::vector<int32_t>& patches) {
   for (int32_t p : patches) added += size_t(std::max(SplitPieces(*mesh, p) - 1, 0));
   mesh->patches.reserve(mesh->patches.size() + added);
   mesh->patch_tops.reserve(mesh->patch_tops.size() + added);
+  if (!mesh->columns_only) {
+    mesh->patch_area.reserve(mesh->patch_area.size() + added);
+    mesh->patch_center.reserve(mesh->patch_center.size() + added);
+  }
   if (!mesh->group_of.empty()) mesh->group_of.reserve(mesh->group_of.size() + added);
 }
 
@@ -80,8 +84,12 @@ void SplitPatch(Mesh* mesh, int patch) {
     }
     mesh->patch_tops[size_t(p.tops_at)] = tops[i];
     p.tops = 1;
-    p.area = mesh->elems[size_t(tops[i])].area;
-    p.center = mesh->Centroid(tops[i]);
+    if (!mesh->columns_only) {
+      mesh->patch_area.resize(mesh->patches.size());
+      mesh->patch_center.resize(mesh->patches.size());
+      mesh->patch_area[size_t(id)] = mesh->elem_area[size_t(tops[i])];
+      mesh->patch_center[size_t(id)] = mesh->Centroid(tops[i]);
+    }
     MoveTo(mesh, tops[i], id);
   }
   // A divided top that gave its children away stays with the patch: its
@@ -122,7 +130,7 @@ void Subdivider::FindNear(const Mesh& mesh, size_t from) {
   if (!(opts_.split_near > 0) || from >= n) return;
   std::vector<double> widths;
   for (size_t p = from; p < n; ++p)
-    if (Splittable(mesh, int(p), &tops_)) widths.push_back(std::sqrt(mesh.patches[p].area));
+    if (Splittable(mesh, int(p), &tops_)) widths.push_back(std::sqrt(mesh.patch_area[p]));
   if (widths.empty()) return;
   std::nth_element(widths.begin(), widths.begin() + long(widths.size() / 2), widths.end());
   const double cell = opts_.split_near * widths[widths.size() / 2];
@@ -151,8 +159,8 @@ void Subdivider::FindNear(const Mesh& mesh, size_t from) {
   for (size_t p = from; p < n; ++p) {
     if (!Splittable(mesh, int(p), &tops_)) continue;
     const Patch& patch = mesh.patches[p];
-    const glm::dvec3 c0 = patch.center, normal = mesh.faces[size_t(patch.face)].normal;
-    const double r = opts_.split_near * std::sqrt(patch.area);
+    const glm::dvec3 c0 = mesh.patch_center[p], normal = mesh.faces[size_t(patch.face)].normal;
+    const double r = opts_.split_near * std::sqrt(mesh.patch_area[p]);
     // Another face's top element, in front, facing back, within r.
     auto close = [&](const Top& t) {
       if (mesh.elems[size_t(t.e)].patch >= 0 &&
@@ -194,8 +202,8 @@ void Subdivider::Spread(const Mesh& mesh, const std::vector<float>& direct, size
       const Element& el = mesh.elems[e];
       const glm::dvec3& ke = mesh.Emission(mesh.FaceOf(int(e)));
       if (!el.IsLeaf() || ke.r + ke.g + ke.b > 0) continue;
-      sum += double(direct[e]) * el.area;
-      area += el.area;
+      sum += double(direct[e]) * mesh.elem_area[size_t(e)];
+      area += mesh.elem_area[size_t(e)];
     }
     direct_mean_ = area > 0 ? sum / area : 0;
   }
@@ -207,8 +215,8 @@ void Subdivider::Spread(const Mesh& mesh, const std::vector<float>& direct, size
       mesh.LeavesUnder(t, &leaves_);
       double s = 0, a = 0;
       for (int l : leaves_) {
-        s += double(direct[size_t(l)]) * mesh.elems[size_t(l)].area;
-        a += mesh.elems[size_t(l)].area;
+        s += double(direct[size_t(l)]) * mesh.elem_area[size_t(l)];
+        a += mesh.elem_area[size_t(l)];
       }
       const double m = a > 0 ? s / a : 0;
       hi = std::max(hi, m);

@@ -77,7 +77,8 @@ void Subdivider::Track(const Mesh& mesh) {
     if (el.IsLeaf() && el.level < opts_.max_level && ShortestEdge(mesh, el) / 2 >= opts_.min_size)
       eligible_[e] |= kEligible;
     if (el.IsLeaf() && !(ke.r + ke.g + ke.b > 0)) eligible_[e] |= kLit;
-    if (el.parent >= 0 && size_t(el.parent) < from) eligible_[size_t(el.parent)] = 0;
+    const int parent = mesh.parent[e];
+    if (parent >= 0 && size_t(parent) < from) eligible_[size_t(parent)] = 0;
   }
 }
 
@@ -111,7 +112,7 @@ double Subdivider::Factor(const Mesh& mesh, const ElemB& b,
   LeafNeighbours(mesh, e, &nb);
   const double unsure = Lum(mesh.Rho(mesh.FaceOf(e)) * ambient) + 0.2 * mean;
   const glm::dvec3 c = mesh.Centroid(e);
-  const double size = std::sqrt(el.area), be = Lum(b[size_t(e)]);
+  const double size = std::sqrt(mesh.elem_area[size_t(e)]), be = Lum(b[size_t(e)]);
   const double se = synced_[size_t(e)], te = kDrift * std::abs(se);
   double factor = 0, most = 0;
   for (int m : nb) {
@@ -169,7 +170,7 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const ElemB& b,
   for (size_t e = 0; e < n; ++e) {
     if (scan && eligible_[e] & kLeaf) sync(e);
     if (!(eligible_[e] & kLit)) continue;
-    const double a = mesh.elems[e].area;
+    const double a = mesh.elem_area[e];
     sum += Lum(b[e]) * a;
     area += a;
   }

@@ -257,18 +257,19 @@ int Worker::Run(std::string* err) {
   // Only the mesh is needed from here on: the scene (100-200 bytes a face)
   // is let go rather than kept for the whole run.
   setup.scene = Scene();
-  // Nor the mesh's links back to the scene's faces, which only the
-  // master's results read.
-  FreeStorage(&mesh_.face_scene), FreeStorage(&mesh_.corner_begin), FreeStorage(&mesh_.face_corners);
-  // Nor, where no patches shoot together (--no-groups, or none formed), a
-  // group index per patch that is -1 for all: an empty one reads alike
-  // (GroupOf, SplitPieces) and SplitPatch does not grow it.
-  if (mesh_.groups.empty()) FreeStorage(&mesh_.group_of);
+  // Hashed while it has its areas and centres (without them MeshHash
+  // computes them again).
+  const proto::Ready ready{mesh_.elems.size(), MeshHash(mesh_)};
+  // Nor what only the master reads: the areas and parents, the patch
+  // centres (a column computes its shooter's: Mesh::Center), the links
+  // back to the scene's faces and, where no patches shoot together, the
+  // group index.
+  mesh_.KeepColumnsOnly();
   // Its hundreds of thousands of small blocks freed go back to the system
   // (glibc keeps them otherwise), before the hemicube's arrays come.
   ReturnFreeMemory();
   frame.clear();
-  proto::EncodeReady({mesh_.elems.size(), MeshHash(mesh_)}, &frame);
+  proto::EncodeReady(ready, &frame);
   setup_heartbeat.reset();
   if (!out_.Send(frame)) return kExitOk;
 

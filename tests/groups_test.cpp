@@ -64,8 +64,8 @@ TEST(Groups, TilesOfOneFloorShootTogether) {
     double nearest = 1e9;
     for (int q : g.members) {
       EXPECT_EQ(m.Tops(q).size(), 4u);  // a tile, not a wall patch
-      EXPECT_GT(to_wall(m.patches[q].center), 0.1);  // not along a wall
-      nearest = std::min(nearest, to_wall(m.patches[q].center));
+      EXPECT_GT(to_wall(m.patch_center[size_t(q)]), 0.1);  // not along a wall
+      nearest = std::min(nearest, to_wall(m.patch_center[size_t(q)]));
       for (int e : m.Tops(q))
         for (int k = 0; k < 4; ++k) {
           lo = glm::min(lo, m.verts[m.elems[e].v[k]]);
@@ -170,7 +170,7 @@ TEST(Groups, TilesOfATiltedValleyGroupOnlyAsFarAsTheOtherSide) {
       for (size_t e = 0; e < m.elems.size(); ++e)
         if (left(m.elems[e].patch) != left(q)) {
           box(int(e), &a, &b);
-          const glm::dvec3 c = m.patches[q].center;
+          const glm::dvec3 c = m.patch_center[size_t(q)];
           nearest = std::min(nearest, glm::length(glm::max(glm::max(a - c, c - b), 0.0)));
         }
     }
@@ -193,7 +193,7 @@ TEST_P(GroupShot, KeepsEnergyExactly) {
   std::vector<FormFactor> col;
   auto unshot_power = [&] {
     glm::dvec3 u(0.0);
-    for (size_t p = 0; p < m.patches.size(); ++p) u += solver.unshot()[p] * m.patches[p].area;
+    for (size_t p = 0; p < m.patches.size(); ++p) u += solver.unshot()[p] * m.patch_area[size_t(p)];
     return u;
   };
   // The light and the walls first, until a group of the lit floor comes up.
@@ -205,7 +205,7 @@ TEST_P(GroupShot, KeepsEnergyExactly) {
   const PatchGroup* g = GroupOf(m, p);
   ASSERT_NE(g, nullptr);
   glm::dvec3 xa(0.0);
-  for (int q : g->members) xa += solver.unshot()[q] * m.patches[q].area;
+  for (int q : g->members) xa += solver.unshot()[q] * m.patch_area[size_t(q)];
   ShotColumn(&hc, m, p, 0, true, 1, &col);
   ASSERT_FALSE(col.empty());
   glm::dvec3 gain(0.0);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "checkpoint.h"
+#include "hemicube.h"
 #include "protocol.h"
 #include "scheduler.h"
 #include "solver.h"
@@ -30,7 +31,7 @@ MeshOptions Coarse() {
 
 double Sum(const std::vector<glm::dvec3>& unshot, const Mesh& m, int c) {
   double s = 0;
-  for (size_t p = 0; p < unshot.size(); ++p) s += unshot[p][c] * m.patches[p].area;
+  for (size_t p = 0; p < unshot.size(); ++p) s += unshot[p][c] * m.patch_area[size_t(p)];
   return s;
 }
 
@@ -40,7 +41,7 @@ TEST(Split, PiecesAreTheTopElementsThenTheirChildren) {
   ASSERT_EQ(m.Tops(0).size(), 4u);
   const IdSpan span = m.Tops(0);
   const std::vector<int> tops(span.begin(), span.end());
-  const double area = m.patches[0].area;
+  const double area = m.patch_area[size_t(0)];
   Divide(&m, tops[1]);  // divided before the split: its children follow it
   ASSERT_EQ(SplitPieces(m, 0), 4);
   SplitPatch(&m, 0);
@@ -49,7 +50,7 @@ TEST(Split, PiecesAreTheTopElementsThenTheirChildren) {
   double sum = 0;
   for (int p : {0, int(patches), int(patches) + 1, int(patches) + 2}) {
     ASSERT_EQ(m.Tops(p).size(), 1u);
-    sum += m.patches[p].area;
+    sum += m.patch_area[size_t(p)];
     std::vector<int> leaves;
     m.Leaves(p, &leaves);
     for (int l : leaves) EXPECT_EQ(m.elems[l].patch, p);
@@ -64,6 +65,42 @@ TEST(Split, PiecesAreTheTopElementsThenTheirChildren) {
   EXPECT_EQ(m.patches.size(), patches + 6);
   EXPECT_EQ(SplitPieces(m, -1), 0);
   EXPECT_EQ(SplitPieces(m, int(m.patches.size())), 0);
+}
+
+// A worker's mesh (KeepColumnsOnly) keeps no areas or patch centres: it
+// computes a shooter's centre again, to the bit, and its columns are the
+// master's, before and after the same divisions and splits.
+TEST(Split, AMeshKeepingColumnsOnlyGivesTheSameCentresAndColumns) {
+  Mesh master = MakeMesh(Floor(), Coarse());
+  SplitPatch(&master, 1);
+  Divide(&master, master.Tops(1)[0]);
+  Mesh worker = master;
+  worker.KeepColumnsOnly();
+  EXPECT_TRUE(worker.elem_area.empty() && worker.parent.empty() && worker.patch_area.empty() &&
+              worker.patch_center.empty() && worker.face_scene.empty());
+  EXPECT_EQ(MeshHash(worker), MeshHash(master));
+  for (Mesh* m : {&master, &worker}) {
+    SplitPatch(m, 1);
+    Divide(m, 3);
+    SplitPatch(m, 2);
+  }
+  EXPECT_TRUE(worker.elem_area.empty() && worker.parent.empty() && worker.patch_area.empty() &&
+              worker.patch_center.empty());
+  EXPECT_EQ(MeshHash(worker), MeshHash(master));
+  ASSERT_EQ(worker.patches.size(), master.patches.size());
+  Hemicube hm(64), hw(64);
+  std::vector<FormFactor> fm, fw;
+  for (int p = 0; p < int(master.patches.size()); ++p) {
+    const glm::dvec3 a = master.Center(p), b = worker.Center(p);
+    EXPECT_TRUE(a.x == b.x && a.y == b.y && a.z == b.z) << p;
+    ShotColumn(&hm, master, p, 0, true, 1, &fm);
+    ShotColumn(&hw, worker, p, 0, true, 1, &fw);
+    ASSERT_EQ(fm.size(), fw.size()) << p;
+    for (size_t i = 0; i < fm.size(); ++i) {
+      EXPECT_EQ(fm[i].elem, fw[i].elem);
+      EXPECT_EQ(fm[i].f, fw[i].f);
+    }
+  }
 }
 
 // Divisions and splits commute: replayed divisions first, then splits, as
@@ -118,7 +155,7 @@ TEST(Split, SolverKeepsTheUnshotPower) {
   const glm::dvec3 before(Sum(solver.unshot(), m, 0), Sum(solver.unshot(), m, 1),
                           Sum(solver.unshot(), m, 2));
   const size_t patches = m.patches.size();
-  const double whole = solver.unshot()[p].r * m.patches[p].area;
+  const double whole = solver.unshot()[p].r * m.patch_area[size_t(p)];
   ASSERT_GT(whole, 0);
   SplitPatch(&m, p);
   solver.Split(p);
@@ -129,7 +166,7 @@ TEST(Split, SolverKeepsTheUnshotPower) {
   std::vector<int> pieces{p};
   for (size_t q = patches; q < m.patches.size(); ++q) pieces.push_back(int(q));
   double got = 0;
-  for (int q : pieces) got += solver.unshot()[q].r * m.patches[q].area;
+  for (int q : pieces) got += solver.unshot()[q].r * m.patch_area[size_t(q)];
   EXPECT_NEAR(got, whole, 1e-13 * whole);
   int brightest = -1, richest = -1;
   double bb = -1, rb = -1;
@@ -231,7 +268,7 @@ TEST(Split, CloseReceiversSplitAPatch) {
   Mesh m = MakeMesh(FloorUnderAFace(), Coarse());
   int under = -1;
   for (int p : m.FacePatches(m.faces[0]))
-    if (glm::length(m.patches[p].center - glm::dvec3(0.25, 0, 0.25)) < 1e-9) under = p;
+    if (glm::length(m.patch_center[size_t(p)] - glm::dvec3(0.25, 0, 0.25)) < 1e-9) under = p;
   ASSERT_GE(under, 0);
   SubdivideOptions so;
   so.split = true;

@@ -59,16 +59,16 @@ TEST(Divide, QuadAndTriangleChildrenTileTheParent) {
     for (int k = 0; k < kChildren; ++k) {
       const Element& c = m.elems[p.first_child + k];
       EXPECT_EQ(c.level, 1);
-      EXPECT_EQ(c.parent, e);
+      EXPECT_EQ(m.parent[size_t(p.first_child + k)], e);
       EXPECT_EQ(c.patch, p.patch);
       EXPECT_EQ(c.IsTriangle(), p.IsTriangle());
-      EXPECT_GT(c.area, 0);
-      a += c.area;
+      EXPECT_GT(m.elem_area[size_t(p.first_child + k)], 0);
+      a += m.elem_area[size_t(p.first_child + k)];
       std::vector<glm::dvec3> poly;
       for (int v = 0; v < (c.IsTriangle() ? 3 : 4); ++v) poly.push_back(m.verts[c.v[v]]);
       EXPECT_GT(glm::dot(AreaVector(poly), m.FaceOf(e).normal), 0) << "child faces its face's way";
     }
-    EXPECT_NEAR(a, p.area, 1e-12 * p.area);
+    EXPECT_NEAR(a, m.elem_area[size_t(e)], 1e-12 * m.elem_area[size_t(e)]);
   }
   EXPECT_EQ(m.LeafCount(), 8);
 }
@@ -182,12 +182,13 @@ TEST(Solver, DividedKeepsPowerAndFollowsTheGradient) {
     glm::dvec3 power(0.0);
     for (int k = 0; k < kChildren; ++k) {
       const int c = p.first_child + k;
-      power += b[c] * lit.mesh.elems[c].area;
+      power += b[c] * lit.mesh.elem_area[size_t(c)];
       for (int ch = 0; ch < 3; ++ch) EXPECT_GE(b[c][ch], 0);
       shaped += std::abs(b[c].r - before[e].r) > 1e-9 * before[e].r;
     }
     for (int ch = 0; ch < 3; ++ch)
-      EXPECT_NEAR(power[ch], before[e][ch] * p.area, 1e-12 * before[e][ch] * p.area) << e;
+      EXPECT_NEAR(power[ch], before[e][ch] * lit.mesh.elem_area[size_t(e)],
+                  1e-12 * before[e][ch] * lit.mesh.elem_area[size_t(e)]) << e;
   }
   EXPECT_GT(shaped, int(edits.size())) << "children differ where the light does";
 }
@@ -214,13 +215,12 @@ TEST(Solver, ShootsColumnsOfAnOlderHierarchy) {
   double got = 0, want = 0;
   std::vector<int> leaves;
   for (const FormFactor& f : col) {
-    const Element& e = m.elems[f.elem];
     const double rho = m.Rho(m.FaceOf(f.elem)).r;
-    want += rho * 4 * f.f * m.patches[p].area;
+    want += rho * 4 * f.f * m.patch_area[size_t(p)];
     m.LeavesUnder(f.elem, &leaves);
     for (int l : leaves) {
-      EXPECT_NEAR(after[l].r - before[l].r, rho * 4 * f.f * m.patches[p].area / e.area, 1e-9);
-      got += (after[l].r - before[l].r) * m.elems[l].area;
+      EXPECT_NEAR(after[l].r - before[l].r, rho * 4 * f.f * m.patch_area[size_t(p)] / m.elem_area[size_t(f.elem)], 1e-9);
+      got += (after[l].r - before[l].r) * m.elem_area[size_t(l)];
     }
   }
   EXPECT_NEAR(got, want, 1e-9 * want);
@@ -373,7 +373,7 @@ TEST(Subdivider, SharpShadowIsDividedAlongItsEdge) {
     const double d = std::max(std::abs(c.x - 0.5), std::abs(c.y - 0.5));
     const bool near = std::abs(d - 0.4) < 0.1;
     (near ? near_n : far_n) += 1;
-    (near ? near_a : far_a) += el.area;
+    (near ? near_a : far_a) += m.elem_area[size_t(e)];
   }
   const double density_near = near_n / near_a, density_far = far_n / far_a;
   EXPECT_GT(density_near, 4 * density_far) << near_n << " near, " << far_n << " elsewhere";

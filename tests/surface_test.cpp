@@ -222,8 +222,8 @@ TEST(Surface, ResultsWeighElementsByTheirOverlapWithEachFace) {
   for (int p = 0; p < int(m.patches.size()); ++p) {
     m.Leaves(p, &leaves);
     for (int e : leaves) {
-      sum += b[e].r * m.elems[e].area;
-      area += m.elems[e].area;
+      sum += b[e].r * m.elem_area[size_t(e)];
+      area += m.elem_area[size_t(e)];
     }
   }
   EXPECT_NEAR(0.5 * (g[0].r + g[1].r), sum / area, 1e-12);  // equal areas
