@@ -134,7 +134,11 @@ TEST(Mesh, MeshHashSeesGeometryAndHierarchy) {
   b.elems[5].first_child = int(b.elems.size());  // as if divided
   EXPECT_NE(MeshHash(b), h);
   b = a;
+  // One more element, with the arrays kept beside the elements (its
+  // parent, its area) grown alike, as every change to the mesh does.
   b.elems.push_back(b.elems.back());
+  b.parent.push_back(b.parent.back());
+  b.elem_area.push_back(b.elem_area.back());
   EXPECT_NE(MeshHash(b), h);
   Scene moved = s;
   for (auto& f : moved.faces)
