@@ -132,6 +132,9 @@ class FrameReader {
   // factors is 20 to 30 KB).
   Result Next(Msg* type, std::string_view* payload, std::string* err);
   size_t buffered() const { return buf_.size() - pos_; }
+  // Bytes the reader's buffer holds, read or not (given back once a large
+  // frame has been copied out).
+  size_t held() const { return buf_.capacity(); }
 
  private:
   void Compact();

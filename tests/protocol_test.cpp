@@ -757,6 +757,25 @@ TEST(Protocol, FrameReaderKeepsUpWithALongStream) {
   EXPECT_GT(frames, 0u);
 }
 
+TEST(Protocol, FrameReaderGivesALargeFrameBackOnceCopiedOut) {
+  // A worker copies its scene frame out (9 MB at 10^6 elements) and builds
+  // its mesh from the copy: the reader must not keep the frame beside it
+  // until its next call.
+  proto::Column c;
+  c.patch = 3;
+  for (int32_t e = 0; e < 700000; ++e) c.ff.push_back({e, 0.5f / 700000});
+  std::string f;
+  proto::EncodeColumn(c, &f);
+  ASSERT_GT(f.size(), size_t{1} << 20);
+  FrameReader r;
+  r.Append(f.data(), f.size());
+  Msg t;
+  std::string payload, err;
+  ASSERT_EQ(r.Next(&t, &payload, &err), FrameReader::kFrame) << err;
+  EXPECT_EQ(payload.size(), f.size() - proto::kHeaderSize);
+  EXPECT_LT(r.held(), size_t{1} << 20);
+}
+
 TEST(Protocol, FrameReaderViewStaysValidUntilTheNextCall) {
   // A whole column and part of the next in the buffer: the first column's
   // payload handed out as a view is still its bytes when read after Next
