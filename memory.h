@@ -23,12 +23,15 @@
 // every element.
 constexpr double kMasterBytesPerElement = 520;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
-// (measured 147 to 148 over 2 shots, at the end of BuildMesh's cutting
-// and at its columns; 170 to 187 once that pass's divisions and splits
-// have come, its hemicube cache rebuilt beside the adjacency): the
-// higher with about 13% room, as for the master (275 from 242 before
-// the mesh kept its master-only parts apart, Mesh::KeepColumnsOnly).
-constexpr double kWorkerBytesPerElement = 215;
+// (measured 147 to 148 over 2 shots without shooter groups, at the end of
+// BuildMesh's cutting and at its columns; 170 to 187 once that pass's
+// divisions and splits have come, its hemicube cache rebuilt beside the
+// adjacency), and, with groups (the default), the group search at
+// start-up: its element boxes, orders and tree beside the finished mesh,
+// 254 with or without divisions. The highest with about 13% room, as for
+// the master (275 from the dividing run's 242 before, which the group
+// search's 301 then already passed).
+constexpr double kWorkerBytesPerElement = 290;
 
 // Bytes this process may still use: physical memory, or less where
 // ulimit -v / -d or a cgroup's memory.max says so.
