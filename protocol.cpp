@@ -527,20 +527,16 @@ bool DecodeWork(std::string_view payload, std::vector<Assignment>* m, std::strin
 }
 
 // The master's hot path; its loops are GetFormFactors'.
-bool DecodeColumn(const char* data, size_t size, Column* m, std::string* err) {
+bool DecodeColumn(std::string_view payload, Column* m, std::string* err) {
   // Into *m itself: a master that decodes into the same Column each time
   // keeps its form factors' storage (no allocation, no zeroing per shot).
-  Reader r(data, size, err);
+  Reader r(payload, err);
   if (!r.Int32(&m->patch, "patch") || !r.Int32(&m->k, "k")) return false;
   if (!r.Finite(&m->compute_s, "compute time")) return false;
   if (!(m->compute_s >= 0)) return r.Fail("compute time is negative");
   if (!r.Finite(&m->wait_s, "wait time")) return false;
   if (!(m->wait_s >= 0)) return r.Fail("wait time is negative");
   return GetFormFactors(&r, &m->ff);
-}
-
-bool DecodeColumn(std::string_view payload, Column* m, std::string* err) {
-  return DecodeColumn(payload.data(), payload.size(), m, err);
 }
 
 bool DecodeDivide(std::string_view payload, std::vector<int32_t>* m, std::string* err) {

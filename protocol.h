@@ -112,8 +112,6 @@ bool DecodeWork(std::string_view payload, std::vector<Assignment>* m, std::strin
 // DecodeColumn writes into *m as it reads, reusing m->ff's storage (the
 // master's hot path); on false *m is partly written.
 bool DecodeColumn(std::string_view payload, Column* m, std::string* err);
-// The same on bytes that are not in a string (no copy needed).
-bool DecodeColumn(const char* payload, size_t size, Column* m, std::string* err);
 bool DecodeDivide(std::string_view payload, std::vector<int32_t>* m, std::string* err);
 bool DecodeError(std::string_view payload, std::string* text, std::string* err);
 

@@ -73,8 +73,8 @@ int main(int argc, char** argv) {
       proto::EncodeColumn(col, &frames.back());
       // What the master shoots is what it decodes (16-bit codes).
       proto::Column got;
-      if (!proto::DecodeColumn(frames.back().data() + proto::kHeaderSize,
-                               frames.back().size() - proto::kHeaderSize, &got, &err)) {
+      if (!proto::DecodeColumn(std::string_view(frames.back()).substr(proto::kHeaderSize), &got,
+                               &err)) {
         std::fprintf(stderr, "radiosity-master: %s\n", err.c_str());
         return 1;
       }

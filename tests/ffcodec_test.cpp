@@ -493,7 +493,7 @@ TEST(FfCodec, ColumnMutationsGiveCleanErrorsOrCanonicalColumns) {
     }
     proto::Column d;
     std::string err;
-    if (!proto::DecodeColumn(g.data(), g.size(), &d, &err)) {
+    if (!proto::DecodeColumn(g, &d, &err)) {
       ++refused;
       ASSERT_FALSE(err.empty()) << Hex(g);
       ASSERT_EQ(err.find('\n'), std::string::npos) << err;
