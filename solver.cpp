@@ -80,7 +80,6 @@ Solver::Solver(const Mesh& mesh, bool overshoot)
 void Solver::PatchArrays() {
   const size_t n = mesh_.patches.size();
   patch_.resize(n);
-  center_.resize(n);
   weight_.resize(n);
   if (!pixel_df_.empty()) pixel_df_.resize(n);  // noise tracked: per patch too
   for (size_t p = 0; p < n; ++p) {
@@ -90,7 +89,6 @@ void Solver::PatchArrays() {
     patch_[p].group = mesh_.group_of.empty() ? -1 : mesh_.group_of[p];
     patch_[p].area = mesh_.patch_area[p];
     patch_[p].fsum = 0;
-    center_[p] = mesh_.patch_center[p];
     weight_[p] = patch_[p].area * std::max({rho.r, rho.g, rho.b});
   }
   // A group's drift moves Σ of its members' powers: its key (members[0])
@@ -329,13 +327,13 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   const bool direct = track_direct_ && Abs(ka) > 0;
   // Where the hemicube looked from (Hemicube::Column), for the noise: each
   // element's direction is taken as its patch centre's.
-  const glm::dvec3 from = group ? group->center : center_[size_t(p)];
+  const glm::dvec3 from = group ? group->center : mesh_.patch_center[size_t(p)];
   const glm::dvec3 axis = group ? group->normal : mesh_.faces[mesh_.patches[p].face].normal;
   // A receiving patch's pixel delta form factor, once per shot, at its
   // first form factor (its fsum still 0).
   auto pixel = [&](int32_t q) {
     if (patch_[q].fsum == 0) {
-      const glm::dvec3 d = center_[size_t(q)] - from;
+      const glm::dvec3 d = mesh_.patch_center[size_t(q)] - from;
       const double len = glm::length(d);
       pixel_df_[size_t(q)] = PixelFormFactor(pixel_ff_, len > 0 ? glm::dot(d, axis) / len : 0.0);
     }
@@ -377,8 +375,8 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
       const double f = double(col[i].f);
       // ρ/A from the patch's ρ and the element's area here rather than a
       // copy per element (24 bytes an element): the same division, so the
-      // same bits. The area is the solver's copy beside B (elem_), not the
-      // 40-byte Element a cache line each.
+      // same bits. The area is the solver's copy beside B (elem_), not
+      // Mesh::elem_area, another cache line each.
       if (q >= 0) {
         const glm::dvec3 w = f * Over(mats[patch[size_t(q)].material].rho, elem[size_t(e)].area);
         const glm::dvec3 gain = xa * w;
@@ -569,7 +567,7 @@ void Solver::Split(int p) {
   if (mesh_.patches.capacity() > patch_.capacity()) {
     const size_t room = mesh_.patches.capacity();
     patch_.reserve(room), weight_.reserve(room);
-    times_shot_.reserve(room), center_.reserve(room);
+    times_shot_.reserve(room);
     if (!pixel_df_.empty()) pixel_df_.reserve(room);
   }
   patch_.resize(n);
@@ -581,7 +579,6 @@ void Solver::Split(int p) {
   }
   weight_.resize(n);
   times_shot_.resize(n, 0);
-  center_.resize(n);
   if (!pixel_df_.empty()) pixel_df_.resize(n);  // noise tracked
   // What each piece's leaves received, per channel, and the pieces' own
   // elements, divided ones complemented as Grow() keeps them.
@@ -590,7 +587,6 @@ void Solver::Split(int p) {
   for (size_t i = 0; i < pieces.size(); ++i) {
     const int q = pieces[i];
     patch_[size_t(q)].area = mesh_.patch_area[size_t(q)];
-    center_[size_t(q)] = mesh_.patch_center[size_t(q)];
     weight_[size_t(q)] = patch_[size_t(q)].area * std::max({kd.r, kd.g, kd.b});
     const IdSpan tops = mesh_.Tops(q);
     std::vector<int> stack(tops.begin(), tops.end());
@@ -630,7 +626,7 @@ void Solver::SplitsDone() {
 }
 
 std::vector<glm::dvec3> Solver::TakeRadiosity() {
-  FreeStorage(&patch_of_), FreeStorage(&patch_), FreeStorage(&center_), FreeStorage(&touched_);
+  FreeStorage(&patch_of_), FreeStorage(&patch_), FreeStorage(&touched_);
   FreeStorage(&is_changed_), FreeStorage(&noise_), FreeStorage(&pixel_df_), FreeStorage(&direct_);
   FreeStorage(&changed_), FreeStorage(&times_shot_);
   FreeStorage(&weight_), FreeStorage(&group_dirty_), FreeStorage(&dirty_groups_), FreeStorage(&leaves_);

@@ -201,7 +201,6 @@ class Solver {
   };
   static_assert(sizeof(PatchShot) == 64, "one cache line");
   std::vector<PatchShot, HugePageAllocator<PatchShot>> patch_;
-  std::vector<glm::dvec3> center_;  // per patch, for the noise's direction
   std::vector<int32_t> touched_;    // Shoot's scratch: the patches it reached
   std::vector<uint8_t> is_changed_; // per element: in changed_
   std::vector<double> noise_;       // per element when tracked: variance of Lum(B)
