@@ -503,11 +503,9 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
       }
     }
   };
-  if (!mask) {  // none of its leaves reaches a pixel: nothing to draw
-  } else if (wide_) {
-    leaves(outline_wide_.data());
-  } else {
-    leaves(outline_.data());
+  if (mask) {  // else none of its leaves reaches a pixel: nothing to draw
+    if (wide_) leaves(outline_wide_.data());
+    else leaves(outline_.data());
   }
   visited_ += cf.le - cf.lb;
   if (clock) {
