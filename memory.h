@@ -24,7 +24,7 @@
 constexpr double kMasterBytesPerElement = 520;
 // A worker: the mesh, its adjacency once divisions come, the hemicube
 // (measured 147 to 148 over 2 shots without shooter groups, at the end of
-// BuildMesh's cutting and at its columns; 170 to 187 once that pass's
+// BuildMesh's cutting and at its columns; 170 to 196 once that pass's
 // divisions and splits have come, its hemicube cache rebuilt beside the
 // adjacency), and, with groups (the default), the group search at
 // start-up: its element boxes, orders and tree beside the finished mesh,
