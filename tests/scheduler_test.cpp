@@ -59,7 +59,7 @@ class FakeTransport : public Transport {
       ev.column.patch = a.patch;
       ev.column.k = a.k;
       ev.column.compute_s = 1e-3;
-      hemicube_.Column(mesh_, a.patch, 0.0, &ev.column.ff);
+      hemicube_.Column(mesh_, a.patch, a.Group(), 0.0, &ev.column.ff);
       events->push_back(ev);
       if (duplicate_at_ == polls_) events->push_back(ev);  // a late copy
       return;
