@@ -7,7 +7,8 @@
 // model (15 ns/element + 70 ns/covered element + 3 ns/pixel) and how many
 // elements the column visited (on faces it did not cull) out of all. Uses only what
 // hemicube.h has had since the cost model was set, so that the same file
-// builds against the old column for the before figures.
+// builds against the old column for the before figures, but for
+// ShotColumn's group argument (since protocol 5: before it, drop it).
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
