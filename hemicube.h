@@ -182,7 +182,7 @@ class Hemicube {
   glm::dvec3 c_{0.0}, u_{0.0}, v_{0.0}, n_{0.0};
   float near_ = 0;
   double coplanar_ = 0, margin_ = 0;
-  const PatchGroup* self_ = nullptr;  // the shooter's group (its members are skipped), or null
+  const PatchGroup* self_ = nullptr;  // in a column: the shooter's group (its members are skipped), or null
   std::vector<int> self_faces_;      // the mesh faces of its members, sorted
   std::vector<float> lx_, ly_, lz_;  // face vertices in the shooter frame
   std::vector<uint32_t> code_;       // outcodes per vertex, 5 bits per face

@@ -534,21 +534,21 @@ bool DecodeWork(std::string_view payload, std::vector<Assignment>* m, std::strin
         !r.Varint(kMaxGroup, &members, "group member count"))
       return false;
     if (members == 0) continue;
-    const std::string at = "patch " + std::to_string(a.patch) + "'s group: ";
-    if (members == 1) return r.Fail(at + "1 member (a group has 2.." + std::to_string(kMaxGroup) + ")");
+    auto at = [&a] { return "patch " + std::to_string(a.patch) + "'s group: "; };
+    if (members == 1) return r.Fail(at() + "1 member (a group has 2.." + std::to_string(kMaxGroup) + ")");
     a.group.members.resize(size_t(members));
     a.group.members[0] = a.patch;
     for (size_t i = 1; i < a.group.members.size(); ++i) {
       uint64_t d;
       if (!r.Varint(UINT32_MAX, &d, "group member")) return false;
       const int64_t q = int64_t(a.group.members[i - 1]) + int64_t(d);
-      if (d == 0) return r.Fail(at + "members not increasing");
-      if (q > INT32_MAX) return r.Fail(at + "member " + std::to_string(q) + " is not in 0..2^31-1");
+      if (d == 0) return r.Fail(at() + "members not increasing");
+      if (q > INT32_MAX) return r.Fail(at() + "member " + std::to_string(q) + " is not in 0..2^31-1");
       a.group.members[i] = int(q);
     }
     if (!r.FiniteVec(&a.group.center, "group centre") || !r.FiniteVec(&a.group.normal, "group normal"))
       return false;
-    if (!UnitNormal(a.group.normal)) return r.Fail(at + "normal is not of unit length");
+    if (!UnitNormal(a.group.normal)) return r.Fail(at() + "normal is not of unit length");
   }
   if (!r.End("work")) return false;
   *m = std::move(w);
