@@ -8,7 +8,6 @@
 
 #include "check.h"
 #include "clock.h"
-#include "groups.h"
 #include "hash.h"
 
 namespace {
@@ -442,11 +441,13 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
   }
   // Only a face holding one of the shooter's group members has leaves to
   // leave out: elsewhere no leaf's element is read from the mesh.
-  const bool own = self_ >= 0 && std::binary_search(self_faces_.begin(), self_faces_.end(), cf.face);
+  const bool own = self_ && std::binary_search(self_faces_.begin(), self_faces_.end(), cf.face);
   // Its leaves, by their outlines (16-bit indices but on a huge face: BuildCache).
   auto leaves = [&](const auto* outline) {
     for (int r = cf.lb, at = cf.pb; r < cf.le; at += outline_n_[r], ++r) {
-      if (own && mesh.group_of[mesh.elems[elem_[r]].patch] == self_) continue;
+      if (own && std::binary_search(self_->members.begin(), self_->members.end(),
+                                    mesh.elems[elem_[r]].patch))
+        continue;
       const auto* vid = outline + at;
       const int n = outline_n_[r];
       uint32_t all = ~0u, any = 0;
@@ -515,15 +516,14 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
   }
 }
 
-void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
+void Hemicube::Column(const Mesh& mesh, int shooter, const PatchGroup* group, double angle,
                       std::vector<FormFactor>* out, ColumnStats* stats) {
   const double t0 = MonotonicSeconds();
   const Patch& sp = mesh.patches[shooter];
   const MeshFace& sf = mesh.faces[sp.face];
   // A group's first member shoots for it all (groups.h), from the group's
   // centroid along its mean normal; its members receive nothing from it.
-  const PatchGroup* group = GroupOf(mesh, shooter);
-  self_ = group ? mesh.group_of[shooter] : -1;
+  self_ = group;
   self_faces_.clear();
   if (group) {
     for (int m : group->members) self_faces_.push_back(mesh.patches[m].face);
@@ -706,7 +706,7 @@ double ShotAngle(unsigned seed, int patch, int k) {
   return double(z >> 11) * 0x1.0p-53 * 2 * M_PI;
 }
 
-void ShotColumn(Hemicube* hemicube, const Mesh& mesh, int patch, int k, bool rotate,
-                unsigned seed, std::vector<FormFactor>* out, ColumnStats* stats) {
-  hemicube->Column(mesh, patch, rotate ? ShotAngle(seed, patch, k) : 0.0, out, stats);
+void ShotColumn(Hemicube* hemicube, const Mesh& mesh, int patch, const PatchGroup* group, int k,
+                bool rotate, unsigned seed, std::vector<FormFactor>* out, ColumnStats* stats) {
+  hemicube->Column(mesh, patch, group, rotate ? ShotAngle(seed, patch, k) : 0.0, out, stats);
 }

@@ -55,10 +55,13 @@ class Hemicube {
   int resolution() const { return res_; }
 
   // Form factors F(shooter -> e) > 0 for leaf elements e, in increasing e.
-  // The hemicube is turned by `angle` radians about the patch normal. A
-  // group's shooter (groups.h) looks from the group's centroid along its
-  // normal and leaves the members' elements out.
-  void Column(const Mesh& mesh, int shooter, double angle,
+  // The hemicube is turned by `angle` radians about the patch normal.
+  // `group`: the shooter group `shooter` is the first member of (groups.h),
+  // or null when it shoots alone; the column then looks from the group's
+  // centroid along its normal and leaves the members' elements out. It is
+  // given, not read from the mesh: a worker's mesh has no groups, the
+  // master sends each with the work (protocol.h, Assignment).
+  void Column(const Mesh& mesh, int shooter, const PatchGroup* group, double angle,
               std::vector<FormFactor>* out, ColumnStats* stats = nullptr);
 
   // Frees the copy of the mesh the columns read (the cache, about 42
@@ -179,7 +182,7 @@ class Hemicube {
   glm::dvec3 c_{0.0}, u_{0.0}, v_{0.0}, n_{0.0};
   float near_ = 0;
   double coplanar_ = 0, margin_ = 0;
-  int32_t self_ = -1;                // the shooter's group (its members are skipped), or -1
+  const PatchGroup* self_ = nullptr;  // in a column: the shooter's group (its members are skipped), or null
   std::vector<int> self_faces_;      // the mesh faces of its members, sorted
   std::vector<float> lx_, ly_, lz_;  // face vertices in the shooter frame
   std::vector<uint32_t> code_;       // outcodes per vertex, 5 bits per face
@@ -199,10 +202,12 @@ class Hemicube {
 // process computing that column turns the hemicube alike.
 double ShotAngle(unsigned seed, int patch, int k);
 
-// The column of the k-th shot of `patch`, turned by ShotAngle when
-// `rotate`: what every process that computes columns (the master alone,
-// a worker, the simulation, the benchmarks) calls, so that they agree.
-void ShotColumn(Hemicube* hemicube, const Mesh& mesh, int patch, int k, bool rotate,
-                unsigned seed, std::vector<FormFactor>* out, ColumnStats* stats = nullptr);
+// The column of the k-th shot of `patch` (for `group`, as Column), turned
+// by ShotAngle when `rotate`: what every process that computes columns
+// (the master alone, a worker, the simulation, the benchmarks) calls, so
+// that they agree.
+void ShotColumn(Hemicube* hemicube, const Mesh& mesh, int patch, const PatchGroup* group, int k,
+                bool rotate, unsigned seed, std::vector<FormFactor>* out,
+                ColumnStats* stats = nullptr);
 
 #endif

@@ -26,7 +26,7 @@ void InProcessTransport::Poll(double, std::vector<WorkerEvent>* events) {
   ev.column.patch = a.patch;
   ev.column.k = a.k;
   const double t0 = MonotonicSeconds();
-  ShotColumn(&hemicube_, mesh_, a.patch, a.k, rotate_, seed_, &ev.column.ff);
+  ShotColumn(&hemicube_, mesh_, a.patch, a.Group(), a.k, rotate_, seed_, &ev.column.ff);
   ev.column.compute_s = MonotonicSeconds() - t0;
   events->push_back(std::move(ev));
 }

@@ -22,16 +22,15 @@
 // 13% room, since subdivision's limit (app.cpp) takes it as the cost of
 // every element.
 constexpr double kMasterBytesPerElement = 520;
-// A worker: the mesh, its adjacency once divisions come, the hemicube
-// (measured 147 to 148 over 2 shots without shooter groups, at the end of
-// BuildMesh's cutting and at its columns; 170 to 196 once that pass's
-// divisions and splits have come, its hemicube cache rebuilt beside the
-// adjacency), and, with groups (the default), the group search at
-// start-up: its element boxes, orders and tree beside the finished mesh,
-// 254 with or without divisions. The highest with about 13% room, as for
-// the master (275 from the dividing run's 242 before, which the group
-// search's 301 then already passed).
-constexpr double kWorkerBytesPerElement = 290;
+// A worker: the mesh, its adjacency once divisions come, the hemicube.
+// It forms no shooter groups (the master sends them with the work), so
+// groups or not it measured the same: 147 to 148 over 2 shots, at the
+// end of BuildMesh's cutting and at its columns; 170 to 196 once that
+// pass's divisions and splits have come, its hemicube cache rebuilt
+// beside the adjacency. The rate is the highest, 196, with about 13% room
+// as for the master (290 while a worker searched for groups itself, 254
+// at its start-up; 275 from the dividing run's 242 before that).
+constexpr double kWorkerBytesPerElement = 225;
 
 // Bytes this process may still use: physical memory, or less where
 // ulimit -v / -d or a cgroup's memory.max says so.

@@ -16,6 +16,7 @@
 #include "check.h"
 #include "coding.h"
 #include "ffcodec.h"
+#include "groups.h"
 #include "hash.h"
 
 namespace proto {
@@ -137,6 +138,13 @@ class VertexTable {
 uint64_t ZigZag(int64_t v) { return v < 0 ? (uint64_t(-(v + 1)) << 1) | 1 : uint64_t(v) << 1; }
 int64_t UnZigZag(uint64_t z) { return z & 1 ? -int64_t(z >> 1) - 1 : int64_t(z >> 1); }
 
+// A face's or a group's normal: the hemicube's frame is built on it as
+// unit (within 1e-6, far above rounding, far below a wrong normal).
+bool UnitNormal(const glm::dvec3& n) {
+  const double len = glm::length(n);
+  return std::isfinite(len) && std::fabs(len - 1) <= 1e-6;
+}
+
 // The checks DecodeScene makes on values; EncodeScene CHECKs them too.
 bool ValidSetup(const SceneSetup& m, std::string* err) {
   auto fail = [&](const std::string& what) {
@@ -152,8 +160,6 @@ bool ValidSetup(const SceneSetup& m, std::string* err) {
                 " is not in 1..64");
   if (!std::isfinite(m.mesh.patch_size) || m.mesh.patch_size < 0)
     return fail("patch size is not finite and >= 0");
-  if (!std::isfinite(m.mesh.group_size) || m.mesh.group_size < 0)
-    return fail("group size is not finite and >= 0");
   if (!(m.heartbeat_s > 0 && m.heartbeat_s <= kMaxHeartbeat))
     return fail("heartbeat period is not in (0, " + std::to_string(int(kMaxHeartbeat)) + "] s");
   const Scene& s = m.scene;
@@ -186,9 +192,7 @@ bool ValidSetup(const SceneSetup& m, std::string* err) {
       if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
         return fail(at + "a vertex is not finite");
     if (!(f.area > 0) || !std::isfinite(f.area)) return fail(at + "area is not finite and > 0");
-    const double len = glm::length(f.normal);
-    if (!std::isfinite(len) || !(std::fabs(len - 1) <= 1e-6))
-      return fail(at + "normal is not of unit length");
+    if (!UnitNormal(f.normal)) return fail(at + "normal is not of unit length");
   }
   return true;
 }
@@ -305,8 +309,6 @@ void EncodeScene(const SceneSetup& m, std::string* out) {
   PutVarint(out, uint32_t(m.mesh.elements_per_patch));
   PutF64(out, m.mesh.patch_size);
   PutU8(out, m.mesh.join);
-  PutU8(out, m.mesh.groups);
-  PutF64(out, m.mesh.group_size);
   PutF64(out, m.heartbeat_s);
   PutGeometry(m.scene, out);
   EndFrame(start, out);
@@ -326,6 +328,17 @@ void EncodeWork(const std::vector<Assignment>& m, std::string* out) {
     CHECK(a.patch >= 0 && a.k >= 0);
     PutVarint(out, uint32_t(a.patch));
     PutVarint(out, uint32_t(a.k));
+    const std::vector<int>& members = a.group.members;
+    PutVarint(out, members.size());
+    if (members.empty()) continue;
+    CHECK(members.size() >= 2 && members.size() <= size_t(kMaxGroup) && members[0] == a.patch);
+    for (size_t i = 1; i < members.size(); ++i) {
+      CHECK(members[i] > members[i - 1]);
+      PutVarint(out, uint32_t(members[i] - members[i - 1]));
+    }
+    CHECK(UnitNormal(a.group.normal));
+    PutVec(out, a.group.center);
+    PutVec(out, a.group.normal);
   }
   EndFrame(start, out);
 }
@@ -425,11 +438,7 @@ bool DecodeScene(std::string_view payload, SceneSetup* m, std::string* err) {
   if (!r.U8(&join, "join")) return false;
   if (join > 1) return r.Fail("join " + std::to_string(join) + " is not 0 or 1");
   s.mesh.join = join;
-  uint8_t groups;
-  if (!r.U8(&groups, "groups")) return false;
-  if (groups > 1) return r.Fail("groups " + std::to_string(groups) + " is not 0 or 1");
-  s.mesh.groups = groups;
-  if (!r.Finite(&s.mesh.group_size, "group size")) return false;
+  s.mesh.groups = false;  // the master's come with the work
   if (!r.Finite(&s.heartbeat_s, "heartbeat period")) return false;
   if (!r.FiniteVec(&s.scene.lo, "bounding box lo") || !r.FiniteVec(&s.scene.hi, "bounding box hi"))
     return false;
@@ -517,10 +526,30 @@ bool DecodeReady(std::string_view payload, Ready* m, std::string* err) {
 bool DecodeWork(std::string_view payload, std::vector<Assignment>* m, std::string* err) {
   Reader r(payload, err);
   uint64_t n;
-  if (!r.Count(2, &n, "assignment count")) return false;
+  if (!r.Count(3, &n, "assignment count")) return false;
   std::vector<Assignment> w(static_cast<size_t>(n));
-  for (Assignment& a : w)
-    if (!r.Int32(&a.patch, "patch") || !r.Int32(&a.k, "k")) return false;
+  for (Assignment& a : w) {
+    uint64_t members;
+    if (!r.Int32(&a.patch, "patch") || !r.Int32(&a.k, "k") ||
+        !r.Varint(kMaxGroup, &members, "group member count"))
+      return false;
+    if (members == 0) continue;
+    auto at = [&a] { return "patch " + std::to_string(a.patch) + "'s group: "; };
+    if (members == 1) return r.Fail(at() + "1 member (a group has 2.." + std::to_string(kMaxGroup) + ")");
+    a.group.members.resize(size_t(members));
+    a.group.members[0] = a.patch;
+    for (size_t i = 1; i < a.group.members.size(); ++i) {
+      uint64_t d;
+      if (!r.Varint(UINT32_MAX, &d, "group member")) return false;
+      const int64_t q = int64_t(a.group.members[i - 1]) + int64_t(d);
+      if (d == 0) return r.Fail(at() + "members not increasing");
+      if (q > INT32_MAX) return r.Fail(at() + "member " + std::to_string(q) + " is not in 0..2^31-1");
+      a.group.members[i] = int(q);
+    }
+    if (!r.FiniteVec(&a.group.center, "group centre") || !r.FiniteVec(&a.group.normal, "group normal"))
+      return false;
+    if (!UnitNormal(a.group.normal)) return r.Fail(at() + "normal is not of unit length");
+  }
   if (!r.End("work")) return false;
   *m = std::move(w);
   return true;

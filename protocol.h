@@ -47,7 +47,9 @@ struct Hello {
 };
 
 // What a worker needs to build the master's mesh bit for bit and to
-// compute columns like the master would.
+// compute columns like the master would. Not the shooter groups: those
+// come with the work (Assignment), and a decoded setup has
+// mesh.groups false.
 struct SceneSetup {
   Scene scene;          // faces (verts, material, index), materials (kd,
                         // ke), lo, hi; names are not sent. Each face's
@@ -71,6 +73,14 @@ struct Ready {
 struct Assignment {
   int32_t patch;
   int32_t k;  // this is the patch's k-th shot: the hemicube angle
+  // The shooter group patch is the first member of (groups.h), or no
+  // members when it shoots alone: the master forms the groups and sends
+  // each with its shooter's work, so that a worker need not (their search
+  // was its memory peak). Only members (members[0] == patch, increasing,
+  // 2..kMaxGroup), center and normal travel; area is not sent.
+  PatchGroup group = {};
+  // The group, or null when patch shoots alone: what ShotColumn takes.
+  const PatchGroup* Group() const { return group.members.empty() ? nullptr : &group; }
 };
 
 struct Column {

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "clock.h"
+#include "groups.h"
 #include "inprocess.h"
 
 namespace {
@@ -348,7 +349,10 @@ void Scheduler::Distribute() {
     while (s.alive && !s.prepared.empty() && s.sent.size() < size_t(s.depth)) {
       const int p = s.prepared.front();
       s.prepared.pop_front();
-      const proto::Assignment a{p, solver_->TimesShot(p)};
+      // A group goes with its shooter's every assignment, a resent one
+      // too (a lost worker's patches come back through `prepared`).
+      proto::Assignment a{p, solver_->TimesShot(p)};
+      if (const PatchGroup* g = GroupOf(mesh_, p)) a.group = *g;
       s.sent.push_back({a, t_->Now()});
       t_->Assign(int(w), a);
     }

@@ -120,7 +120,7 @@ void SimTransport::Start(int w) {
   wk.todo.pop_front();
   const bool fixed = opts_.column_cost_s >= 0;
   const double t0 = ThreadCpuSeconds();
-  ShotColumn(&hemicube_, mesh_, a.patch, a.k, opts_.rotate, opts_.seed, &scratch_.ff);
+  ShotColumn(&hemicube_, mesh_, a.patch, a.Group(), a.k, opts_.rotate, opts_.seed, &scratch_.ff);
   scratch_.compute_s = (fixed ? opts_.column_cost_s : ThreadCpuSeconds() - t0) * wk.factor;
   wk.frame.clear();
   proto::EncodeColumn(scratch_, &wk.frame);

@@ -162,6 +162,13 @@ bool Worker::Handle(proto::Msg type, const std::string& payload, int* status,
           why = "patch " + std::to_string(a.patch) + " out of range";
           break;
         }
+        // The decoder saw the members increasing from a.patch; the last
+        // is the largest.
+        if (a.Group() && size_t(a.group.members.back()) >= mesh_.patches.size()) {
+          why = "patch " + std::to_string(a.patch) + "'s group: member " +
+                std::to_string(a.group.members.back()) + " out of range";
+          break;
+        }
         todo_.push_back({a, MonotonicSeconds()});
       }
       if (!why.empty()) break;
@@ -262,8 +269,10 @@ int Worker::Run(std::string* err) {
   const proto::Ready ready{mesh_.elems.size(), MeshHash(mesh_)};
   // Nor what only the master reads: the areas and parents, the patch
   // centres (a column computes its shooter's: Mesh::Center), the links
-  // back to the scene's faces and, where no patches shoot together, the
-  // group index.
+  // back to the scene's faces and the group index (all -1: the decoded
+  // setup has groups off, so the mesh has none; the master sends each
+  // group with its shooter's work, and forming them here was the
+  // worker's memory peak).
   mesh_.KeepColumnsOnly();
   // Its hundreds of thousands of small blocks freed go back to the system
   // (glibc keeps them otherwise), before the hemicube's arrays come.
@@ -299,7 +308,8 @@ int Worker::Run(std::string* err) {
     col.wait_s = MonotonicSeconds() - todo_.front().received;
     todo_.pop_front();
     const double t0 = ThreadCpuSeconds();
-    ShotColumn(hemicube_.get(), mesh_, a.patch, a.k, setup.rotate, setup.seed, &col.ff);
+    ShotColumn(hemicube_.get(), mesh_, a.patch, a.Group(), a.k, setup.rotate, setup.seed,
+               &col.ff);
     col.compute_s = ThreadCpuSeconds() - t0;
     frame.clear();
     proto::EncodeColumn(col, &frame);

@@ -12,6 +12,7 @@
 
 #include "bench/load.h"
 #include "clock.h"
+#include "groups.h"
 #include "hemicube.h"
 #include "scheduler.h"
 #include "solver.h"
@@ -80,7 +81,8 @@ int main(int argc, char** argv) {
     const int step = std::max(1, n / 400);
     int columns = 0;
     const double t0 = MonotonicSeconds();
-    for (int p = 0; p < n; p += step, ++columns) ShotColumn(&hc, mesh, p, 0, true, 1, &col, &st);
+    for (int p = 0; p < n; p += step, ++columns)
+      ShotColumn(&hc, mesh, p, GroupOf(mesh, p), 0, true, 1, &col, &st);
     const double total = MonotonicSeconds() - t0;
     const double per = total / columns;
     const double model =

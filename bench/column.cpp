@@ -7,7 +7,8 @@
 // model (15 ns/element + 70 ns/covered element + 3 ns/pixel) and how many
 // elements the column visited (on faces it did not cull) out of all. Uses only what
 // hemicube.h has had since the cost model was set, so that the same file
-// builds against the old column for the before figures.
+// builds against the old column for the before figures, but for
+// ShotColumn's group argument (since protocol 5: before it, drop it).
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -16,6 +17,7 @@
 
 #include "bench/load.h"
 #include "clock.h"
+#include "groups.h"
 #include "hemicube.h"
 #include "mesh.h"
 #include "scene.h"
@@ -45,18 +47,18 @@ int main(int argc, char** argv) {
   const int step = std::max(1, n / want);
   // One column first, untimed: buffers and any per-mesh setup are a
   // once-per-run cost, not a column's.
-  ShotColumn(&hc, mesh, 0, 0, true, 1, &col);
+  ShotColumn(&hc, mesh, 0, GroupOf(mesh, 0), 0, true, 1, &col);
   // Twice over the same shooters: without stats for the time (the stage
   // clocks cost a little per face), then with them for the split, shown as
   // shares of that time (CPU time: the machine may be shared).
   int columns = 0;
   const double t0 = ThreadCpuSeconds();
   for (int p = 0; p < n && columns < want; p += step, ++columns)
-    ShotColumn(&hc, mesh, p, 0, true, 1, &col);
+    ShotColumn(&hc, mesh, p, GroupOf(mesh, p), 0, true, 1, &col);
   const double per = (ThreadCpuSeconds() - t0) / columns;
   ColumnStats st;
   for (int p = 0, c = 0; p < n && c < want; p += step, ++c)
-    ShotColumn(&hc, mesh, p, 0, true, 1, &col, &st);
+    ShotColumn(&hc, mesh, p, GroupOf(mesh, p), 0, true, 1, &col, &st);
   const double staged = std::max(1e-12, st.transform_s + st.raster_s + st.readback_s);
   const double elems = double(mesh.elems.size());
   const double model =

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "clock.h"
+#include "groups.h"
 #include "hemicube.h"
 #include "bench/load.h"
 #include "mesh.h"
@@ -68,7 +69,7 @@ int main(int argc, char** argv) {
       if (p < 0) break;
       col.patch = p;
       col.k = solver.TimesShot(p);
-      ShotColumn(&h, mesh, p, col.k, true, 1, &col.ff);
+      ShotColumn(&h, mesh, p, GroupOf(mesh, p), col.k, true, 1, &col.ff);
       frames.emplace_back();
       proto::EncodeColumn(col, &frames.back());
       // What the master shoots is what it decodes (16-bit codes).

@@ -221,7 +221,7 @@ class Replayer {
     proto::Column c;
     c.patch = a.patch;
     c.k = a.k;
-    ShotColumn(&hemicube_, s_.mesh, a.patch, a.k, true, 1, &c.ff);
+    ShotColumn(&hemicube_, s_.mesh, a.patch, a.Group(), a.k, true, 1, &c.ff);
     std::string frame, payload, err;
     proto::EncodeColumn(c, &frame);
     proto::FrameReader reader;

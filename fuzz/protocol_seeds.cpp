@@ -52,7 +52,12 @@ int main(int argc, char** argv) {
   EncodeHello(Hello(), &s); frames.push_back({Msg::kHello, s}); s.clear();
   EncodeScene(setup, &s); frames.push_back({Msg::kScene, s}); s.clear();
   EncodeReady({1234, 0x0123456789abcdefull}, &s); frames.push_back({Msg::kReady, s}); s.clear();
-  EncodeWork({{0, 0}, {5, 1}, {300, 7}}, &s); frames.push_back({Msg::kWork, s}); s.clear();
+  // One assignment carries its shooter group (protocol.h, Assignment).
+  Assignment grouped{12, 1};
+  grouped.group.members = {12, 13, 17, 400};
+  grouped.group.center = glm::dvec3(0.25, 0.5, 0.125);
+  grouped.group.normal = glm::dvec3(0, 1, 0);
+  EncodeWork({{0, 0}, {5, 1}, grouped, {300, 7}}, &s); frames.push_back({Msg::kWork, s}); s.clear();
   EncodeColumn(col, &s); frames.push_back({Msg::kColumn, s}); s.clear();
   EncodeDivide({4, 9, 16, 1000000}, &s); frames.push_back({Msg::kDivide, s}); s.clear();
   add(Msg::kHeartbeat, EncodeHeartbeat);

@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "clock.h"
+#include "groups.h"
 #include "hemicube.h"
 #include "protocol.h"
 #include "test_util.h"
@@ -648,7 +649,7 @@ TEST(FfCodec, RealColumnsCostLessThanFiveBytesPerFormFactor) {
     c.patch = p;
     c.compute_s = 0.004;
     c.wait_s = 0.0001;
-    h.Column(mesh, p, 0.0, &c.ff);
+    h.Column(mesh, p, GroupOf(mesh, p), 0.0, &c.ff);
     ASSERT_FALSE(c.ff.empty());
     std::string frame;
     proto::EncodeColumn(c, &frame);

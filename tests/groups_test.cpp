@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 
 #include "hemicube.h"
+#include "protocol.h"
 #include "results.h"
 #include "scheduler.h"
 #include "solver.h"
 #include "test_util.h"
+#include "wire_util.h"
 
 namespace {
 
@@ -199,14 +201,14 @@ TEST_P(GroupShot, KeepsEnergyExactly) {
   // The light and the walls first, until a group of the lit floor comes up.
   int p = solver.Select();
   for (int shots = 0; !GroupOf(m, p) && shots < 40; ++shots, p = solver.Select()) {
-    ShotColumn(&hc, m, p, 0, true, 1, &col);
+    ShotColumn(&hc, m, p, GroupOf(m, p), 0, true, 1, &col);
     solver.Shoot(p, col);
   }
   const PatchGroup* g = GroupOf(m, p);
   ASSERT_NE(g, nullptr);
   glm::dvec3 xa(0.0);
   for (int q : g->members) xa += solver.unshot()[q] * m.patch_area[size_t(q)];
-  ShotColumn(&hc, m, p, 0, true, 1, &col);
+  ShotColumn(&hc, m, p, GroupOf(m, p), 0, true, 1, &col);
   ASSERT_FALSE(col.empty());
   glm::dvec3 gain(0.0);
   for (const FormFactor& ff : col) {
@@ -220,6 +222,46 @@ TEST_P(GroupShot, KeepsEnergyExactly) {
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(after[k], before[k] - xa[k] + gain[k], 1e-12 * before[k]);
   EXPECT_EQ(solver.TimesShot(p), 1);
   EXPECT_EQ(solver.TimesShot(g->members[1]), 0);
+}
+
+// A worker forms no groups: it builds its mesh with them off and takes
+// each from its shooter's assignment. Its columns, for every shooter
+// (turned, twice), are the master's bit for bit, drawn on the master's
+// mesh with its groups.
+TEST_P(GroupShot, AWorkersColumnFromTheSentGroupIsTheMasters) {
+  const Mesh m = MakeMesh(TiledBox(10, GetParam()), Half());
+  ASSERT_FALSE(m.groups.empty());
+  MeshOptions off = Half();
+  off.groups = false;
+  Mesh worker = MakeMesh(TiledBox(10, GetParam()), off);
+  ASSERT_TRUE(worker.groups.empty());
+  EXPECT_EQ(MeshHash(worker), MeshHash(m));  // the worker's Ready agrees
+  worker.KeepColumnsOnly();
+  Hemicube hm(64), hw(64);
+  std::vector<FormFactor> want, got;
+  size_t grouped = 0;
+  for (int p = 0; p < int(m.patches.size()); ++p) {
+    if (!IsShooter(m, p)) continue;
+    for (int k = 0; k < 2; ++k) {
+      proto::Assignment a{p, k};
+      if (const PatchGroup* g = GroupOf(m, p)) a.group = *g;
+      std::string frame, err;
+      proto::EncodeWork({a}, &frame);
+      std::vector<proto::Assignment> d;
+      ASSERT_TRUE(proto::DecodeWork(std::string_view(frame).substr(proto::kHeaderSize), &d, &err))
+          << err;
+      ASSERT_EQ(d.size(), 1u);
+      grouped += d[0].Group() != nullptr;
+      ShotColumn(&hm, m, p, GroupOf(m, p), k, true, 1, &want);
+      ShotColumn(&hw, worker, p, d[0].Group(), k, true, 1, &got);
+      ASSERT_EQ(got.size(), want.size()) << p;
+      for (size_t i = 0; i < want.size(); ++i) {
+        ASSERT_EQ(got[i].elem, want[i].elem) << p << " " << i;
+        ASSERT_EQ(Bits(got[i].f), Bits(want[i].f)) << p << " " << i;
+      }
+    }
+  }
+  EXPECT_EQ(grouped, 2 * m.groups.size());
 }
 
 // The closed box with its tiled floor: what is absorbed is what is emitted,

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "groups.h"
 #include "test_util.h"
 
 namespace {
@@ -53,7 +54,7 @@ TEST(Hemicube, ClosedBoxColumnsSumToOne) {
     std::vector<FormFactor> col;
     for (size_t p = 0; p < m.patches.size(); p += 7)
       for (double angle : {0.0, 0.3, 1.1}) {
-        h.Column(m, int(p), angle, &col);
+        h.Column(m, int(p), GroupOf(m, int(p)), angle, &col);
         EXPECT_NEAR(Sum(col), 1.0, 1e-5) << "patch " << p << " R " << res;
       }
   }
@@ -75,7 +76,7 @@ TEST(Hemicube, PointToParallelSquareMatchesAnalytic) {
     ASSERT_EQ(m.FacePatches(m.faces[0]).size(), 1u);
     Hemicube h(256);
     std::vector<FormFactor> col;
-    h.Column(m, m.FacePatches(m.faces[0])[0], 0.2, &col);
+    h.Column(m, m.FacePatches(m.faces[0])[0], nullptr, 0.2, &col);  // alone
     const double exact = 4 * CornerParallel(half, half, 1.0);
     EXPECT_NEAR(SumOverFace(m, col, 1), exact, 0.005 * exact) << "half " << half;
   }
@@ -95,7 +96,7 @@ TEST(Hemicube, FaceOfManyVerticesMatchesAnalytic) {
   ASSERT_GT(m.faces[1].vend - m.faces[1].vbegin, 65536);
   Hemicube h(256);
   std::vector<FormFactor> col;
-  h.Column(m, m.FacePatches(m.faces[0])[0], 0.2, &col);
+  h.Column(m, m.FacePatches(m.faces[0])[0], nullptr, 0.2, &col);  // alone
   const double exact = 4 * CornerParallel(1.0, 1.0, 1.0);
   EXPECT_NEAR(SumOverFace(m, col, 1), exact, 0.005 * exact);
 }
@@ -105,9 +106,9 @@ TEST(Hemicube, ReleasedCacheGivesTheSameColumn) {
   const Mesh m = MakeMesh(Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)}));
   Hemicube h(64);
   std::vector<FormFactor> before, after;
-  h.Column(m, 5, 0.3, &before);
+  h.Column(m, 5, GroupOf(m, 5), 0.3, &before);
   h.ReleaseCache();
-  h.Column(m, 5, 0.3, &after);
+  h.Column(m, 5, GroupOf(m, 5), 0.3, &after);
   ASSERT_FALSE(before.empty());
   EXPECT_TRUE(SameColumn(before, after));
 }
@@ -119,7 +120,7 @@ TEST(Hemicube, IndependentOfScale) {
     Mesh m = MakeMesh(s);
     Hemicube h(128);
     std::vector<FormFactor> col;
-    h.Column(m, 5, 0.0, &col);
+    h.Column(m, 5, GroupOf(m, 5), 0.0, &col);
     sums.push_back(SumOverFace(m, col, 1) + 2 * SumOverFace(m, col, 3));
   }
   EXPECT_NEAR(sums[0], sums[1], 1e-5);
@@ -138,7 +139,7 @@ TEST(Hemicube, SameColumnAtAnyScale) {
     Mesh m = MakeMesh(s);
     Hemicube h(128);
     cols.emplace_back();
-    h.Column(m, 5, ShotAngle(1, 5, 0), &cols.back());
+    h.Column(m, 5, GroupOf(m, 5), ShotAngle(1, 5, 0), &cols.back());
   }
   for (int k : {0, 2}) {
     ASSERT_EQ(cols[k].size(), cols[1].size()) << "scale index " << k;
@@ -160,7 +161,7 @@ TEST(Hemicube, BackFacesAndFacesBehindGetNothing) {
   Hemicube h(64);
   std::vector<FormFactor> col;
   for (int p : m.FacePatches(m.faces[0])) {
-    h.Column(m, p, 0.0, &col);
+    h.Column(m, p, GroupOf(m, p), 0.0, &col);
     EXPECT_TRUE(col.empty());
   }
 }
@@ -170,7 +171,7 @@ TEST(Hemicube, ColumnIsSortedAndPositive) {
   Mesh m = MakeMesh(s);
   Hemicube h(64);
   std::vector<FormFactor> col;
-  h.Column(m, 3, ShotAngle(1, 3, 0), &col);
+  h.Column(m, 3, GroupOf(m, 3), ShotAngle(1, 3, 0), &col);
   ASSERT_FALSE(col.empty());
   for (size_t i = 0; i < col.size(); ++i) {
     EXPECT_GT(col[i].f, 0.0f);
@@ -208,8 +209,8 @@ TEST(Hemicube, CullingGivesThePlainZBuffersColumns) {
       for (int i = 0; i < 24; ++i) {
         const int p = i * (n - 1) / 23;
         const double angle = i % 2 ? ShotAngle(1, p, 0) : 0.0;
-        culled.Column(m, p, angle, &a, &cs);
-        plain.Column(m, p, angle, &b, &ps);
+        culled.Column(m, p, GroupOf(m, p), angle, &a, &cs);
+        plain.Column(m, p, GroupOf(m, p), angle, &b, &ps);
         ASSERT_TRUE(SameColumn(a, b)) << name << " pass " << pass << " patch " << p;
       }
       EXPECT_LT(cs.elements, ps.elements) << name;
@@ -266,8 +267,8 @@ TEST(Hemicube, CullingGivesThePlainZBuffersColumnsOnATessellatedScene) {
   for (int i = 0; i < 16; ++i) {
     const int p = int((int64_t(i) * 7919) % n);
     const double angle = ShotAngle(1, p, 0);
-    culled.Column(m, p, angle, &a, &cs);
-    plain.Column(m, p, angle, &b, &ps);
+    culled.Column(m, p, GroupOf(m, p), angle, &a, &cs);
+    plain.Column(m, p, GroupOf(m, p), angle, &b, &ps);
     ASSERT_FALSE(a.empty());
     ASSERT_TRUE(SameColumn(a, b)) << "patch " << p;
   }
@@ -290,11 +291,11 @@ TEST(Hemicube, ShotColumnTurnsByTheShotsAngle) {
       if (x[i].elem != y[i].elem || x[i].f != y[i].f) return false;
     return true;
   };
-  ShotColumn(&h, m, 3, 2, true, 7, &a);
-  g.Column(m, 3, ShotAngle(7, 3, 2), &b);
+  ShotColumn(&h, m, 3, GroupOf(m, 3), 2, true, 7, &a);
+  g.Column(m, 3, GroupOf(m, 3), ShotAngle(7, 3, 2), &b);
   EXPECT_TRUE(same(a, b));
-  ShotColumn(&h, m, 3, 2, false, 7, &a);
-  g.Column(m, 3, 0.0, &b);
+  ShotColumn(&h, m, 3, GroupOf(m, 3), 2, false, 7, &a);
+  g.Column(m, 3, GroupOf(m, 3), 0.0, &b);
   EXPECT_TRUE(same(a, b));
   EXPECT_NE(ShotAngle(7, 3, 2), ShotAngle(7, 3, 3));
   EXPECT_NE(ShotAngle(7, 3, 2), ShotAngle(8, 3, 2));

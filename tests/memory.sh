@@ -28,7 +28,7 @@ status=$?
 printf '#!/bin/sh\nulimit -v 30000\nexec "%s" "$@"\n' "$RADIOSITY" >"$T/lowmem.sh"
 chmod +x "$T/lowmem.sh"
 "$RADIOSITY" -j 1 -s 1 -o "$T/w" --patch-size 0.1 --worker-cmd "$T/lowmem.sh" "$ROOM" 2>"$T/err3"
-if grep -q "local worker 1 (pid [0-9]*): says: about .* elements would need about .* GB (290 bytes each)" "$T/err3"; then
+if grep -q "local worker 1 (pid [0-9]*): says: about .* elements would need about .* GB (225 bytes each)" "$T/err3"; then
   pass "a worker without the memory says so ($(grep says "$T/err3" | head -1))"
 else
   fail "a worker without the memory: $(head -c 400 "$T/err3")"

@@ -16,6 +16,7 @@
 
 #include <gtest/gtest.h>
 
+#include "groups.h"
 #include "protocol.h"
 #include "peer.h"
 #include "test_util.h"
@@ -425,7 +426,7 @@ TEST_F(PoolTest, ARealWorkerComputesTheColumn) {
   EXPECT_EQ(ev[0].column.k, 1);
   Hemicube h(16);
   std::vector<FormFactor> want;
-  ShotColumn(&h, mesh_, 2, 1, false, 1, &want);
+  ShotColumn(&h, mesh_, 2, GroupOf(mesh_, 2), 1, false, 1, &want);
   ASSERT_EQ(ev[0].column.ff.size(), want.size());
   for (size_t i = 0; i < want.size(); ++i) EXPECT_EQ(ev[0].column.ff[i].elem, want[i].elem);
   pool_.Shutdown();

@@ -11,12 +11,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "groups.h"
 #include "hemicube.h"
 #include "test_util.h"
 #include "wire_util.h"
@@ -36,8 +38,6 @@ std::string RawScene(const proto::SceneSetup& m) {
   WVar(&s, uint32_t(m.mesh.elements_per_patch));
   WF64(&s, m.mesh.patch_size);
   s += char(m.mesh.join);
-  s += char(m.mesh.groups);
-  WF64(&s, m.mesh.group_size);
   WF64(&s, m.heartbeat_s);
   WVec(&s, m.scene.lo);
   WVec(&s, m.scene.hi);
@@ -100,7 +100,6 @@ proto::SceneSetup TestSetup() {
   for (size_t i = 0; i < m.scene.faces.size(); ++i) m.scene.faces[i].index = int(3 * i + 1);
   m.mesh.patch_size = 0.45;
   m.mesh.elements_per_patch = 3;
-  m.mesh.group_size = 0.625;
   m.resolution = 128;
   m.rotate = 0;
   m.seed = 0xdeadbeef;
@@ -176,7 +175,7 @@ TEST(Protocol, HelloRoundTrips) {
     std::string frame;
     proto::EncodeHello(h, &frame);
     const std::string p = PayloadOf(frame, Msg::kHello);
-    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x04\x00", 6));  // magic, version
+    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x05\x00", 6));  // magic, version
     proto::Hello d;
     d.magic = 0;
     d.version = 0;
@@ -187,7 +186,7 @@ TEST(Protocol, HelloRoundTrips) {
     EXPECT_EQ(d.build, b);
   }
   // A build string longer than 256 bytes or not printable is refused.
-  std::string p = "RADW" + std::string("\x04\x00", 2);
+  std::string p = "RADW" + std::string("\x05\x00", 2);
   std::string long_build = p;
   WVar(&long_build, 257);
   long_build += std::string(257, 'x');
@@ -238,8 +237,9 @@ TEST(Protocol, SceneRoundTripsBitForBitAndRebuildsTheSameMesh) {
   EXPECT_EQ(d.seed, m.seed);
   EXPECT_EQ(Bits(d.heartbeat_s), Bits(m.heartbeat_s));
   EXPECT_EQ(Bits(d.mesh.patch_size), Bits(m.mesh.patch_size));
-  EXPECT_EQ(d.mesh.groups, m.mesh.groups);
-  EXPECT_EQ(Bits(d.mesh.group_size), Bits(m.mesh.group_size));
+  // The groups come with the work (Assignment): a worker forms none.
+  EXPECT_TRUE(m.mesh.groups);
+  EXPECT_FALSE(d.mesh.groups);
   EXPECT_EQ(d.mesh.elements_per_patch, m.mesh.elements_per_patch);
   EXPECT_EQ(d.mesh.join, m.mesh.join);
   for (int k = 0; k < 3; ++k) {
@@ -315,11 +315,6 @@ TEST(Protocol, SceneValuesOutOfRangeAreRefused) {
       {"patch size < 0", [](S* m) { m->mesh.patch_size = -0.5; }, false},
       {"patch size inf", [](S* m) { m->mesh.patch_size = HUGE_VAL; }, false},
       {"patch size nan", [](S* m) { m->mesh.patch_size = std::nan(""); }, false},
-      {"no groups", [](S* m) { m->mesh.groups = false; }, true},
-      {"group size 0", [](S* m) { m->mesh.group_size = 0; }, true},
-      {"group size 2", [](S* m) { m->mesh.group_size = 2; }, true},
-      {"group size < 0", [](S* m) { m->mesh.group_size = -1; }, false},
-      {"group size nan", [](S* m) { m->mesh.group_size = std::nan(""); }, false},
       {"heartbeat 1 ms", [](S* m) { m->heartbeat_s = 1e-3; }, true},
       {"heartbeat max", [](S* m) { m->heartbeat_s = proto::kMaxHeartbeat; }, true},
       {"heartbeat 0", [](S* m) { m->heartbeat_s = 0; }, false},
@@ -458,9 +453,110 @@ TEST(Protocol, WorkRoundTrips) {
   WVar(&p, 1);
   WVar(&p, 1ull << 31);  // patch > INT32_MAX
   WVar(&p, 0);
+  WVar(&p, 0);
   std::vector<proto::Assignment> d;
   EXPECT_FALSE(proto::DecodeWork(p, &d, &err));
   EXPECT_FALSE(err.empty());
+}
+
+// A group's first member's assignment carries the group: members,
+// centre and normal bit for bit (the worker's column is the master's).
+proto::Assignment Grouped(int32_t patch, int32_t k, std::vector<int> members) {
+  proto::Assignment a{patch, k};
+  a.group.members = std::move(members);
+  a.group.center = glm::dvec3(0.1, 1.0 / 3, -2e-7);
+  a.group.normal = glm::normalize(glm::dvec3(0.2, 1, -0.1));
+  return a;
+}
+
+TEST(Protocol, WorkCarriesShooterGroups) {
+  std::vector<int> widest;
+  for (int i = 0; i < kMaxGroup; ++i) widest.push_back(1000 + 300 * i);
+  std::vector<int> last = {INT32_MAX - 2, INT32_MAX};
+  const std::vector<proto::Assignment> w = {
+      {7, 0}, Grouped(3, 2, {3, 4, 9, 200000}), {8, 1}, Grouped(1000, 0, widest),
+      Grouped(INT32_MAX - 2, 5, last)};
+  std::string frame;
+  proto::EncodeWork(w, &frame);
+  const std::string p = PayloadOf(frame, Msg::kWork);
+  // The layout: count, then per assignment patch, k, member count and,
+  // for a group, the members after the first as increments, centre, normal.
+  std::string raw;
+  WVar(&raw, w.size());
+  for (const proto::Assignment& a : w) {
+    WVar(&raw, uint32_t(a.patch));
+    WVar(&raw, uint32_t(a.k));
+    WVar(&raw, a.group.members.size());
+    for (size_t i = 1; i < a.group.members.size(); ++i)
+      WVar(&raw, uint32_t(a.group.members[i] - a.group.members[i - 1]));
+    if (a.group.members.empty()) continue;
+    WVec(&raw, a.group.center);
+    WVec(&raw, a.group.normal);
+  }
+  EXPECT_EQ(Hex(p), Hex(raw)) << "the layout is not the documented one";
+  // A lone shooter's assignment costs one byte more than before groups
+  // travelled; a group of 4 spread over 2 * 10^5 patches, 54 bytes more.
+  std::string one;
+  proto::EncodeWork({w[1]}, &one);
+  EXPECT_EQ(one.size(), proto::kHeaderSize + 1 + 1 + 1 + 1 + 1 + 1 + 3 + 48);
+  std::vector<proto::Assignment> d;
+  std::string err;
+  ASSERT_TRUE(proto::DecodeWork(p, &d, &err)) << err;
+  ASSERT_EQ(d.size(), w.size());
+  for (size_t i = 0; i < w.size(); ++i) {
+    EXPECT_EQ(d[i].patch, w[i].patch);
+    EXPECT_EQ(d[i].k, w[i].k);
+    EXPECT_EQ(d[i].Group() != nullptr, w[i].Group() != nullptr) << i;
+    EXPECT_EQ(d[i].group.members, w[i].group.members) << i;
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(Bits(d[i].group.center[k]), Bits(w[i].group.center[k])) << i;
+      EXPECT_EQ(Bits(d[i].group.normal[k]), Bits(w[i].group.normal[k])) << i;
+    }
+  }
+}
+
+// Each malformed group is refused with a one-line message.
+TEST(Protocol, BadShooterGroupsAreRefused) {
+  struct Case {
+    const char* name;
+    std::function<void(std::string*)> members;  // after patch 5, k 0
+    const char* error;
+  };
+  const glm::dvec3 c(0.5), up(0, 1, 0);
+  auto vecs = [](std::string* s, glm::dvec3 c, glm::dvec3 n) { WVec(s, c), WVec(s, n); };
+  const Case cases[] = {
+      {"one member", [&](std::string* s) { WVar(s, 1); vecs(s, c, up); }, "1 member"},
+      {"not increasing", [&](std::string* s) { WVar(s, 3); WVar(s, 2); WVar(s, 0); vecs(s, c, up); },
+       "members not increasing"},
+      {"too many", [&](std::string* s) {
+         WVar(s, kMaxGroup + 1);
+         for (int i = 0; i < kMaxGroup; ++i) WVar(s, 1);
+         vecs(s, c, up);
+       }, "group member count"},
+      {"past 2^31-1", [&](std::string* s) { WVar(s, 2); WVar(s, INT32_MAX); vecs(s, c, up); },
+       "is not in 0..2^31-1"},
+      {"centre nan", [&](std::string* s) { WVar(s, 2); WVar(s, 1); vecs(s, glm::dvec3(std::nan("")), up); },
+       "group centre"},
+      {"normal inf", [&](std::string* s) { WVar(s, 2); WVar(s, 1); vecs(s, c, glm::dvec3(0, HUGE_VAL, 0)); },
+       "group normal"},
+      {"normal not unit", [&](std::string* s) { WVar(s, 2); WVar(s, 1); vecs(s, c, glm::dvec3(0, 1.001, 0)); },
+       "normal is not of unit length"},
+      {"normal zero", [&](std::string* s) { WVar(s, 2); WVar(s, 1); vecs(s, c, glm::dvec3(0)); },
+       "normal is not of unit length"},
+      {"cut short", [&](std::string* s) { WVar(s, 2); WVar(s, 1); WVec(s, c); }, "group normal"},
+  };
+  for (const Case& k : cases) {
+    std::string p;
+    WVar(&p, 1);
+    WVar(&p, 5);
+    WVar(&p, 0);
+    k.members(&p);
+    std::vector<proto::Assignment> d;
+    std::string err;
+    EXPECT_FALSE(proto::DecodeWork(p, &d, &err)) << k.name;
+    EXPECT_NE(err.find(k.error), std::string::npos) << k.name << ": " << err;
+    EXPECT_EQ(err.find('\n'), std::string::npos) << k.name << ": " << err;
+  }
 }
 
 TEST(Protocol, DivideRoundTripsInOrder) {

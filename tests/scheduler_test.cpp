@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "groups.h"
 #include "inprocess.h"
 #include "results.h"
 #include "scheduler.h"
@@ -25,6 +26,7 @@ class FakeTransport : public Transport {
     ASSERT_FALSE(lost_.count(w)) << "assignment to a lost worker";
     queue_[w].push_back(a);
     log_.push_back({w, a.patch});
+    sent_.push_back(a);
     max_outstanding_ = std::max(max_outstanding_, queue_[w].size());
   }
   void Divide(const std::vector<int32_t>&) override {}
@@ -59,7 +61,7 @@ class FakeTransport : public Transport {
       ev.column.patch = a.patch;
       ev.column.k = a.k;
       ev.column.compute_s = 1e-3;
-      hemicube_.Column(mesh_, a.patch, 0.0, &ev.column.ff);
+      hemicube_.Column(mesh_, a.patch, a.Group(), 0.0, &ev.column.ff);
       events->push_back(ev);
       if (duplicate_at_ == polls_) events->push_back(ev);  // a late copy
       return;
@@ -70,6 +72,7 @@ class FakeTransport : public Transport {
   Hemicube hemicube_;
   std::vector<std::vector<proto::Assignment>> queue_;
   std::vector<std::pair<int, int>> log_;  // (worker, patch) in assignment order
+  std::vector<proto::Assignment> sent_;   // the assignments themselves, in that order
   std::map<long, int> lose_at_;           // poll number -> worker lost then
   std::set<int> lost_;
   std::set<int> silent_;                  // workers that never answer (SIGSTOP)
@@ -240,6 +243,50 @@ TEST(Scheduler, LostWorkerLosesNothing) {
   long shots = 0;
   for (size_t p = 0; p < m.patches.size(); ++p) shots += par.TimesShot(int(p));
   EXPECT_EQ(shots, r.shots);
+}
+
+// Workers form no shooter groups: every assignment of a group's first
+// member carries the group (groups.h), one resent after its worker was
+// lost too, and no other assignment carries one.
+TEST(Scheduler, EveryAssignmentOfAGroupCarriesItResentOnesToo) {
+  // The box's floor cut into 10 x 10 tiles, the ceiling the light: with
+  // patch size 0.5 the tiles away from the walls group (groups_test).
+  const glm::dvec3 dark(0.0);
+  Scene s = Box(1.0, {glm::dvec3(0.6)}, {dark, glm::dvec3(10), dark, dark, dark, dark});
+  s.faces.erase(s.faces.begin());
+  for (int i = 0; i < 10; ++i)
+    for (int j = 0; j < 10; ++j) {
+      const double x = i / 10.0, z = j / 10.0;
+      AddFace(&s, {{x, 0, z}, {x, 0, z + 0.1}, {x + 0.1, 0, z + 0.1}, {x + 0.1, 0, z}},
+              glm::dvec3(0.5), dark);
+    }
+  for (size_t f = 0; f < s.faces.size(); ++f) s.faces[f].index = int(f);
+  MeshOptions half;
+  half.patch_size = 0.5;
+  Mesh m = MakeMesh(s, half);
+  ASSERT_FALSE(m.groups.empty());
+  FakeTransport t(m, 3);
+  t.lose_at_[30] = 1;
+  t.lose_at_[80] = 2;
+  Solver par(m, true);
+  RunOptions o = Opts();
+  o.max_shots = 200;
+  RunResult r = RunMaster(&m, o, &par, nullptr, &t, nullptr, nullptr);
+  EXPECT_EQ(r.lost, 2);
+  std::map<std::pair<int, int>, int> times;  // (patch, k) -> assignments
+  size_t grouped = 0, resent_groups = 0;
+  for (const proto::Assignment& a : t.sent_) {
+    const PatchGroup* g = GroupOf(m, a.patch);
+    ASSERT_EQ(a.Group() != nullptr, g != nullptr) << a.patch;
+    if (++times[{a.patch, a.k}] == 2 && g) ++resent_groups;
+    if (!g) continue;
+    ++grouped;
+    EXPECT_EQ(a.group.members, g->members);
+    EXPECT_EQ(a.group.center, g->center);
+    EXPECT_EQ(a.group.normal, g->normal);
+  }
+  EXPECT_GT(grouped, 0u);
+  EXPECT_GT(resent_groups, 0u);
 }
 
 TEST(Scheduler, LateCopyOfAColumnIsNotShotTwice) {

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "groups.h"
 #include "results.h"
 #include "scheduler.h"
 #include "test_util.h"
@@ -165,7 +166,7 @@ TEST(Solver, SelectIsTheFullScanOnTheShippedScenes) {
         if (queue.empty()) break;
         const int p = queue.front();
         queue.pop_front();
-        ShotColumn(&h, m, p, solver.TimesShot(p), true, 1, &column);
+        ShotColumn(&h, m, p, GroupOf(m, p), solver.TimesShot(p), true, 1, &column);
         solver.Shoot(p, column);
         solver.Release(p);
         taken[p] = 0;
@@ -201,7 +202,7 @@ TEST(Solver, TrackingDoesNotChangeWhatShootGives) {
     const int p = plain.Select();
     ASSERT_EQ(p, tracked.Select()) << "shot " << shot;
     if (p < 0) break;
-    ShotColumn(&h, m, p, plain.TimesShot(p), true, 1, &column);
+    ShotColumn(&h, m, p, GroupOf(m, p), plain.TimesShot(p), true, 1, &column);
     plain.Shoot(p, column);
     tracked.Shoot(p, column);
   }

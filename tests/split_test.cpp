@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "checkpoint.h"
+#include "groups.h"
 #include "hemicube.h"
 #include "protocol.h"
 #include "scheduler.h"
@@ -93,8 +94,8 @@ TEST(Split, AMeshKeepingColumnsOnlyGivesTheSameCentresAndColumns) {
   for (int p = 0; p < int(master.patches.size()); ++p) {
     const glm::dvec3 a = master.Center(p), b = worker.Center(p);
     EXPECT_TRUE(a.x == b.x && a.y == b.y && a.z == b.z) << p;
-    ShotColumn(&hm, master, p, 0, true, 1, &fm);
-    ShotColumn(&hw, worker, p, 0, true, 1, &fw);
+    ShotColumn(&hm, master, p, GroupOf(master, p), 0, true, 1, &fm);
+    ShotColumn(&hw, worker, p, GroupOf(worker, p), 0, true, 1, &fw);
     ASSERT_EQ(fm.size(), fw.size()) << p;
     for (size_t i = 0; i < fm.size(); ++i) {
       EXPECT_EQ(fm[i].elem, fw[i].elem);
@@ -145,7 +146,7 @@ TEST(Split, SolverKeepsTheUnshotPower) {
   std::vector<FormFactor> col;
   for (int i = 0; i < 3; ++i) {  // the light's patch, then a floor patch or two
     const int p = solver.Select();
-    ShotColumn(&h, m, p, solver.TimesShot(p), true, 1, &col);
+    ShotColumn(&h, m, p, GroupOf(m, p), solver.TimesShot(p), true, 1, &col);
     solver.Shoot(p, col);
   }
   int p = 0;
@@ -180,7 +181,7 @@ TEST(Split, SolverKeepsTheUnshotPower) {
   for (int i = 0; i < 20; ++i) {
     const int s = solver.Select();
     ASSERT_GE(s, 0);
-    ShotColumn(&h, m, s, solver.TimesShot(s), true, 1, &col);
+    ShotColumn(&h, m, s, GroupOf(m, s), solver.TimesShot(s), true, 1, &col);
     solver.Shoot(s, col);
   }
 }
@@ -196,7 +197,7 @@ TEST(Split, OneSplitsDoneAPassIsOneASplit) {
   auto shoot = [&](Solver* s, const Mesh& m) {
     const int p = s->Select();
     ASSERT_GE(p, 0);
-    ShotColumn(&h, m, p, s->TimesShot(p), true, 1, &col);
+    ShotColumn(&h, m, p, GroupOf(m, p), s->TimesShot(p), true, 1, &col);
     s->Shoot(p, col);
   };
   for (int i = 0; i < 3; ++i) shoot(&a, once), shoot(&b, each);
@@ -320,7 +321,7 @@ TEST(Split, DirectLightDoesNotDependOnShotOrder) {
   Hemicube h(64);
   std::vector<FormFactor> col;
   auto shoot = [&](Solver* solver, int p) {
-    ShotColumn(&h, m, p, solver->TimesShot(p), true, 1, &col);
+    ShotColumn(&h, m, p, GroupOf(m, p), solver->TimesShot(p), true, 1, &col);
     solver->Shoot(p, col);
   };
   Solver a(m, true), b(m, true);

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "groups.h"
 #include "hemicube.h"
 #include "scheduler.h"
 #include "results.h"
@@ -128,7 +129,7 @@ TEST(Divide, HemicubeSeesNoCracks) {
     std::vector<FormFactor> col;
     for (size_t p = 0; p < m.patches.size(); p += 7)
       for (double angle : {0.0, 0.3, 1.1}) {
-        h.Column(m, int(p), angle, &col);
+        h.Column(m, int(p), GroupOf(m, int(p)), angle, &col);
         EXPECT_NEAR(Sum(col), 1.0, 1e-5) << "patch " << p << " R " << res;
         for (const FormFactor& f : col) ASSERT_TRUE(m.elems[f.elem].IsLeaf());
       }
@@ -202,7 +203,7 @@ TEST(Solver, ShootsColumnsOfAnOlderHierarchy) {
   Solver solver(m, false);
   const int p = solver.Select();
   std::vector<FormFactor> col;
-  h.Column(m, p, 0.0, &col);
+  h.Column(m, p, GroupOf(m, p), 0.0, &col);
   std::vector<int32_t> edits;
   for (const FormFactor& f : col)
     if (f.elem % 3 == 0) edits.push_back(f.elem);
@@ -307,7 +308,7 @@ TEST(Solver, NoiseIsAboutTheSpreadOfTurnedHemicubes) {
     for (int k = 0; k < kTurns; ++k) {
       Solver solver(m, false);
       solver.TrackNoise(res);
-      ShotColumn(&h, m, 0, k, true, 1, &col);
+      ShotColumn(&h, m, 0, GroupOf(m, 0), k, true, 1, &col);
       solver.Shoot(0, col);
       for (size_t e = 0; e < m.elems.size(); ++e) {
         const glm::dvec3& b = solver.radiosity()[e];

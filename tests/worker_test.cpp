@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "ffcodec.h"
+#include "groups.h"
 #include "hemicube.h"
 #include "protocol.h"
 #include "peer.h"
@@ -75,7 +76,7 @@ class WorkerTest : public ::testing::Test {
     EXPECT_EQ(c.patch, a.patch);
     EXPECT_EQ(c.k, a.k);
     std::vector<FormFactor> want;
-    ShotColumn(h, m, a.patch, a.k, false, 1, &want);
+    ShotColumn(h, m, a.patch, a.Group(), a.k, false, 1, &want);
     ASSERT_EQ(c.ff.size(), want.size());
     for (size_t i = 0; i < want.size(); ++i) {
       EXPECT_EQ(c.ff[i].elem, want[i].elem) << i;
@@ -143,7 +144,7 @@ TEST_F(WorkerTest, AColumnAfterDivisionsSeesTheDividedMesh) {
   master_->Send(f);
   ExpectColumn(&h, m, {1, 1});
   std::vector<FormFactor> want;
-  ShotColumn(&h, m, 1, 1, false, 1, &want);
+  ShotColumn(&h, m, 1, GroupOf(m, 1), 1, false, 1, &want);
   EXPECT_GE(want.back().elem, before);  // a child's, which ExpectColumn compared
 }
 
@@ -195,6 +196,18 @@ TEST_F(WorkerTest, WorkOutOfTheMeshIsAnError) {
   proto::EncodeWork({{1 << 20, 0}}, &f);
   master_->Send(f);
   EXPECT_EQ(Error(), "patch 1048576 out of range");
+}
+
+TEST_F(WorkerTest, AGroupMemberOutOfTheMeshIsAnError) {
+  Handshake();
+  proto::Assignment a{1, 0};
+  a.group.members = {1, 2, 1 << 20};
+  a.group.center = glm::dvec3(0.5);
+  a.group.normal = glm::dvec3(0, 1, 0);
+  std::string f;
+  proto::EncodeWork({a}, &f);
+  master_->Send(f);
+  EXPECT_EQ(Error(), "patch 1's group: member 1048576 out of range");
 }
 
 TEST_F(WorkerTest, ADivisionOfNoLeafIsAnError) {
