@@ -296,32 +296,42 @@ class Grouper {
     }
     RadixSort(&keyed, [](uint64_t k) { return k; }, kIdBits);
     order_.resize(n);
-    for (size_t i = 0; i < n; ++i) order_[i] = int(keyed[i] & ((uint64_t{1} << kIdBits) - 1));
+    std::vector<int32_t> slot(n);
+    for (size_t i = 0; i < n; ++i) {
+      order_[i] = int(keyed[i] & ((uint64_t{1} << kIdBits) - 1));
+      slot[size_t(order_[i])] = int32_t(i);
+    }
     FreeStorage(&keyed);
-    // The boxes in the tree's order (a leaf's are read in a row), in
-    // float (FloatBox), and the leaves from the boxes in double and the
-    // corners' most in front along the patch's normal (the slab); the
-    // mesh read in the tree's order (neighbours in it are mostly
-    // neighbours in the mesh), so that nothing per element is kept for
-    // later but the box. And each patch's home: the leaf of its first
-    // top element.
+    // The boxes in the tree's order (a leaf's are read in a row), in float
+    // (FloatBox), written to their places as the mesh is read in its own
+    // order (read in the tree's, it waited on a cache miss an element),
+    // and the leaves made as their elements come, from the boxes in
+    // double and the corners' most in front along the face's normal (the
+    // slab; its plane the first element's to come). Not from the float
+    // boxes: a wall's elements, flat in its plane, must stay on it to the
+    // eps_ that Side and the slab allow, which float's rounding is not
+    // (the searches from the tessellated box's tiles took 2 to 17 times
+    // as long). And each patch's home: the leaf of its first top element.
     box_.resize(n);
     home_.assign(m_.patches.size(), -1);
     levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
-    for (size_t i = 0; i < n; ++i) {
-      const int e = order_[i];
-      const Element& el = m_.elems[size_t(e)];
+    std::vector<bool> made(levels_[0].size(), false);
+    for (size_t e = 0; e < n; ++e) {
+      const size_t i = size_t(slot[e]);
+      const Element& el = m_.elems[e];
       Bound(el, &a, &b);
       box_[i] = {{Down(a.x), Down(a.y), Down(a.z)}, {Up(b.x), Up(b.y), Up(b.z)}};
-      const MeshFace& f = Plane(el.patch);
+      const Patch& pa = m_.patches[size_t(el.patch)];
+      const MeshFace& f = m_.faces[size_t(pa.face)];
       double top = glm::dot(f.normal, m_.verts[size_t(el.v[0])]);
       for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k)
         top = std::max(top, glm::dot(f.normal, m_.verts[size_t(el.v[k])]));
-      if (m_.patch_tops[size_t(m_.patches[size_t(el.patch)].tops_at)] == e)
-        home_[size_t(el.patch)] = int(i / kLeaf);
+      if (m_.patch_tops[size_t(pa.tops_at)] == int32_t(e)) home_[size_t(el.patch)] = int(i / kLeaf);
       Extend(&levels_[0][i / kLeaf], {a, b, f.normal, f.normal, f.offset, f.normal, top},
-             i % kLeaf == 0);
+             !made[i / kLeaf]);
+      made[i / kLeaf] = true;
     }
+    FreeStorage(&slot);
     while (levels_.back().size() > 1) {
       const std::vector<Box>& below = levels_.back();
       std::vector<Box> up((below.size() + 1) / 2);
