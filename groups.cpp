@@ -58,13 +58,6 @@ struct Query {
 struct FloatBox {
   glm::vec3 lo, hi;
 };
-float Down(double x) {
-  // Out of float's range: the largest float, or -inf (a plain cast is
-  // undefined there).
-  const float f = x > double(FLT_MAX) ? FLT_MAX : x < -double(FLT_MAX) ? -HUGE_VALF : float(x);
-  return double(f) > x ? std::nextafter(f, -HUGE_VALF) : f;
-}
-float Up(double x) { return -Down(-x); }
 
 // A box of the tree of elements (Grouper::BuildTree): their bounding box,
 // and of their planes the normals' bounding box and the least offset.
@@ -320,7 +313,8 @@ class Grouper {
       const size_t i = size_t(slot[e]);
       const Element& el = m_.elems[e];
       Bound(el, &a, &b);
-      box_[i] = {{Down(a.x), Down(a.y), Down(a.z)}, {Up(b.x), Up(b.y), Up(b.z)}};
+      box_[i] = {{FloatDown(a.x), FloatDown(a.y), FloatDown(a.z)},
+                {FloatUp(b.x), FloatUp(b.y), FloatUp(b.z)}};
       const Patch& pa = m_.patches[size_t(el.patch)];
       const MeshFace& f = m_.faces[size_t(pa.face)];
       double top = glm::dot(f.normal, m_.verts[size_t(el.v[0])]);
@@ -560,7 +554,8 @@ class Grouper {
       front = glm::dot(s.n, m_.verts[size_t(el.v[k])]) - s.offset > eps_;
     if (!front) return false;
     const MeshFace& f = Plane(el.patch);
-    return AnyCorner(s.p, [&](const glm::dvec3& v) { return glm::dot(f.normal, v) - f.offset > eps_; });
+    return AnyCorner(s.p,
+                     [&](const glm::dvec3& v) { return glm::dot(f.normal, v) - f.offset > eps_; });
   }
 
   // May a and b shoot as one, as far as their planes tell? The rule of
@@ -571,7 +566,8 @@ class Grouper {
     if (glm::dot(A.normal, B.normal) < std::cos(kGroupAngle * M_PI / 180)) return false;
     // Some corner of patch p behind f's plane by more than tau_.
     auto behind = [&](const MeshFace& f, int p) {
-      return AnyCorner(p, [&](const glm::dvec3& v) { return glm::dot(f.normal, v) - f.offset < -tau_; });
+      return AnyCorner(
+          p, [&](const glm::dvec3& v) { return glm::dot(f.normal, v) - f.offset < -tau_; });
     };
     return !behind(A, b) && !behind(B, a);
   }
@@ -709,6 +705,15 @@ class Grouper {
 };
 
 }  // namespace
+
+float FloatDown(double x) {
+  // Out of float's range: the largest float, or -inf (a plain cast is
+  // undefined there).
+  const float f = x > double(FLT_MAX) ? FLT_MAX : x < -double(FLT_MAX) ? -HUGE_VALF : float(x);
+  return double(f) > x ? std::nextafter(f, -HUGE_VALF) : f;
+}
+
+float FloatUp(double x) { return -FloatDown(-x); }
 
 void FormGroups(const MeshOptions& opts, Mesh* mesh) {
   mesh->groups.clear();
