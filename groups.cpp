@@ -358,7 +358,7 @@ class Grouper {
   }
 
   // May an element in b face patch p: some point of p's box in front of
-  // its plane (Lights, LightsSlot)? Each term of the dot product bounded by
+  // its plane (Lights, LightsBox)? Each term of the dot product bounded by
   // the largest over the corners of the normals' box and p's box, summed
   // in glm::dot's order, less the least offset: rounding is monotonic, so
   // no element b holds is farther in front than this.

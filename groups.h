@@ -37,7 +37,10 @@
 // the master and every worker form the same groups (workers get the
 // options in the scene setup), and a checkpoint need not save them.
 //
-// Numbers: double, as the mesh's geometry.
+// Numbers: double, as the mesh's geometry; the search keeps its element
+// boxes in float, rounded outward, only to rule elements out (an element
+// it does not rule out is measured in double, so the groups are those of
+// boxes in double).
 #ifndef RADIOSITY_GROUPS_H
 #define RADIOSITY_GROUPS_H
 
