@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cfloat>
 #include <cmath>
 #include <unordered_map>
 
@@ -28,15 +29,34 @@ Cell CellOf(const glm::dvec3& x, double size) {
           int64_t(std::floor(x.z / size))};
 }
 
-// A patch as the rule sees it: its plane, centre, corners and extent, and
-// what is known so far of the distance to its nearest receiver (Fits).
+// A patch as the rule sees it besides what the mesh keeps (its centre,
+// its face's plane, its top elements' corners): its extent, and what is
+// known so far of the distance to its nearest receiver (Fits). 64 bytes
+// a patch, not 136 with copies of the centre and plane and a list of
+// corners: at 10^6 elements, beside the whole mesh and the scene, the
+// group search was the master's peak.
 struct PatchInfo {
-  glm::dvec3 c{0.0}, n{0.0};
-  double offset = 0;
-  int32_t corners_at = 0, corners = 0;  // its elements' corners: Grouper::corners_
-  glm::dvec3 lo{0.0}, hi{0.0};  // their bounding box
+  glm::dvec3 lo{0.0}, hi{0.0};  // its elements' corners' bounding box
   double near = 0, far = 0;     // the distance is at least near, at most far
   bool candidate = false;
+};
+
+// A patch asking for its nearest receiver (Grouper::Nearest): what every
+// test of the search reads, gathered once.
+struct Query {
+  int p;
+  const glm::dvec3& c;   // its centre
+  const glm::dvec3& n;   // its face's plane
+  double offset;
+  const PatchInfo& in;
+};
+
+// An element's bounding box in float, rounded outward: it holds the box
+// in double, so the distance from a point to it is never larger (each
+// step of BoxDistance is monotonic), and an element no nearer by it is no
+// nearer by the exact box (Grouper::Nearer). 24 bytes an element, not 48.
+struct FloatBox {
+  glm::vec3 lo, hi;
 };
 
 // A box of the tree of elements (Grouper::BuildTree): their bounding box,
@@ -83,13 +103,13 @@ class Grouper {
     std::unordered_map<Cell, std::vector<Entry>, CellHash> cells;
     for (size_t p = 0; p < info_.size(); ++p)
       if (info_[p].candidate)
-        cells[CellOf(info_[p].c, G_)].push_back({int(p), info_[p].lo, info_[p].hi});
+        cells[CellOf(m_.patch_center[p], G_)].push_back({int(p), info_[p].lo, info_[p].hi});
     if (cells.empty()) return;
     std::vector<char> taken(info_.size(), 0);
     std::vector<int> group;
     for (size_t p = 0; p < info_.size(); ++p) {
       if (!info_[p].candidate || taken[p]) continue;
-      const std::vector<Entry>& cell = cells[CellOf(info_[p].c, G_)];
+      const std::vector<Entry>& cell = cells[CellOf(m_.patch_center[p], G_)];
       group.assign(1, int(p));
       taken[p] = 1;
       glm::dvec3 lo = info_[p].lo, hi = info_[p].hi;
@@ -126,7 +146,7 @@ class Grouper {
         const double a = m_.patch_area[size_t(q)];
         pg.area += a;
         pg.center += a * m_.patch_center[size_t(q)];
-        pg.normal += a * info_[q].n;
+        pg.normal += a * Plane(q).normal;
       }
       pg.center /= pg.area;
       pg.normal = glm::normalize(pg.normal);
@@ -139,42 +159,50 @@ class Grouper {
   void Describe() {
     info_.resize(m_.patches.size());
     for (size_t p = 0; p < m_.patches.size(); ++p) {
-      const Patch& pa = m_.patches[p];
-      const IdSpan tops = m_.Tops(int(p));
-      const MeshFace& f = m_.faces[pa.face];
       PatchInfo& in = info_[p];
-      in.c = m_.patch_center[p];
-      in.n = f.normal;
-      in.offset = f.offset;
-      in.lo = in.hi = in.c;
-      in.corners_at = int32_t(corners_.size());
-      for (int e : tops) {
-        const Element& el = m_.elems[e];
-        for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) {
-          if (std::find(corners_.begin() + in.corners_at, corners_.end(), el.v[k]) ==
-              corners_.end())
-            corners_.push_back(el.v[k]);
-          in.lo = glm::min(in.lo, m_.verts[el.v[k]]);
-          in.hi = glm::max(in.hi, m_.verts[el.v[k]]);
-        }
-      }
-      in.corners = int32_t(corners_.size()) - in.corners_at;
+      in.lo = in.hi = m_.patch_center[p];
+      AnyCorner(int(p), [&](const glm::dvec3& v) {
+        in.lo = glm::min(in.lo, v);
+        in.hi = glm::max(in.hi, v);
+        return false;
+      });
     }
   }
 
-  IdSpan Corners(const PatchInfo& in) const {
-    return {corners_.data() + in.corners_at, corners_.data() + in.corners_at + in.corners};
+  // The plane of patch p: its face's.
+  const MeshFace& Plane(int p) const { return m_.faces[size_t(m_.patches[size_t(p)].face)]; }
+
+  // Whether f(v) holds for some corner v of patch p's top elements, asked
+  // of each in turn until one does (a corner two elements share is asked
+  // twice: the rule's tests ask whether any or all of them pass, which a
+  // repeat does not change).
+  template <class F>
+  bool AnyCorner(int p, F f) const {
+    for (int e : m_.Tops(p)) {
+      const Element& el = m_.elems[size_t(e)];
+      for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k)
+        if (f(m_.verts[size_t(el.v[k])])) return true;
+    }
+    return false;
+  }
+
+  // Element el's bounding box, in double.
+  void Bound(const Element& el, glm::dvec3* lo, glm::dvec3* hi) const {
+    *lo = *hi = m_.verts[size_t(el.v[0])];
+    for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k) {
+      *lo = glm::min(*lo, m_.verts[size_t(el.v[k])]);
+      *hi = glm::max(*hi, m_.verts[size_t(el.v[k])]);
+    }
   }
 
   // Every element's bounding box, and a tree of them; then which patches
   // are candidates.
   void IndexElements() {
-    stamp_.assign(m_.elems.size(), 0);
     BuildTree(false);
     for (size_t p = 0; p < info_.size(); ++p) {
       PatchInfo& in = info_[p];
       // Emitters shoot alone: their direct light is most of the answer.
-      const glm::dvec3& ke = m_.Emission(m_.faces[m_.patches[p].face]);
+      const glm::dvec3& ke = m_.Emission(Plane(int(p)));
       if (ke.r != 0 || ke.g != 0 || ke.b != 0) continue;
       // Small patches only: a patch of about the patch size already is the
       // mesh's unit of where light leaves from, and a group of those would
@@ -223,16 +251,9 @@ class Grouper {
   void BuildTree(bool by_facing) {
     const size_t n = m_.elems.size();
     CHECK(n <= size_t{1} << kIdBits);
-    // An element's bounding box, made where needed (twice, in the mesh's
-    // order) rather than kept by id beside the boxes in the tree's order.
-    auto bound = [&](size_t e, glm::dvec3* lo, glm::dvec3* hi) {
-      const Element& el = m_.elems[e];
-      *lo = *hi = m_.verts[size_t(el.v[0])];
-      for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k) {
-        *lo = glm::min(*lo, m_.verts[size_t(el.v[k])]);
-        *hi = glm::max(*hi, m_.verts[size_t(el.v[k])]);
-      }
-    };
+    // A tree built again (by facing) is built without the old one beside.
+    FreeStorage(&box_);
+    FreeStorage(&levels_);
     // The codes' box: the vertices' (the elements' corners and perhaps a
     // few more: any box orders them).
     glm::dvec3 lo(0.0), hi(0.0), a, b;
@@ -251,12 +272,12 @@ class Grouper {
     const glm::dvec3 scale = double(1 << bits) / glm::max(hi - lo, glm::dvec3(1e-300));
     std::vector<uint64_t> keyed(n);
     for (size_t e = 0; e < n; ++e) {
-      bound(e, &a, &b);
+      Bound(m_.elems[e], &a, &b);
       const glm::dvec3 q =
           glm::clamp((0.5 * (a + b) - lo) * scale, 0.0, double((1 << bits) - 1));
       uint64_t facing = 0;
       if (by_facing) {
-        const glm::dvec3& nn = info_[size_t(m_.elems[e].patch)].n;
+        const glm::dvec3& nn = Plane(m_.elems[e].patch).normal;
         const glm::dvec3 an = glm::abs(nn);
         const int axis = an.x >= an.y && an.x >= an.z ? 0 : an.y >= an.z ? 1 : 2;
         facing = uint64_t(2 * axis + (nn[axis] < 0));
@@ -268,38 +289,43 @@ class Grouper {
     }
     RadixSort(&keyed, [](uint64_t k) { return k; }, kIdBits);
     order_.resize(n);
-    slot_of_.resize(n);
+    std::vector<int32_t> slot(n);
     for (size_t i = 0; i < n; ++i) {
       order_[i] = int(keyed[i] & ((uint64_t{1} << kIdBits) - 1));
-      slot_of_[size_t(order_[i])] = int(i);
+      slot[size_t(order_[i])] = int32_t(i);
     }
     FreeStorage(&keyed);
-    // The boxes in the tree's order (a leaf's are read in a row), written
-    // to their places as the mesh is read in its own order.
-    // So are its corners' most in front along its patch's normal (its
-    // slab), kept until the leaves are made.
-    elo_.resize(n);
-    ehi_.resize(n);
-    patch_of_.resize(n);
-    std::vector<double> tops(n);
-    for (size_t e = 0; e < n; ++e) {
-      const size_t i = size_t(slot_of_[e]);
-      bound(e, &elo_[i], &ehi_[i]);
-      const Element& el = m_.elems[e];
-      patch_of_[i] = el.patch;
-      const glm::dvec3& nn = info_[size_t(el.patch)].n;
-      double top = glm::dot(nn, m_.verts[size_t(el.v[0])]);
-      for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k)
-        top = std::max(top, glm::dot(nn, m_.verts[size_t(el.v[k])]));
-      tops[i] = top;
-    }
+    // The boxes in the tree's order (a leaf's are read in a row), in float
+    // (FloatBox), written to their places as the mesh is read in its own
+    // order (read in the tree's, it waited on a cache miss an element),
+    // and the leaves made as their elements come, from the boxes in
+    // double and the corners' most in front along the face's normal (the
+    // slab; its plane the first element's to come). Not from the float
+    // boxes: a wall's elements, flat in its plane, must stay on it to the
+    // eps_ that Side and the slab allow, which float's rounding is not
+    // (the searches from the tessellated box's tiles took 2 to 17 times
+    // as long). And each patch's home: the leaf of its first top element.
+    box_.resize(n);
+    home_.assign(m_.patches.size(), -1);
     levels_.assign(1, std::vector<Box>((n + kLeaf - 1) / kLeaf));
-    for (size_t i = 0; i < n; ++i) {
-      const PatchInfo& in = info_[size_t(patch_of_[i])];
-      Extend(&levels_[0][i / kLeaf], {elo_[i], ehi_[i], in.n, in.n, in.offset, in.n, tops[i]},
-             i % kLeaf == 0);
+    std::vector<bool> made(levels_[0].size(), false);
+    for (size_t e = 0; e < n; ++e) {
+      const size_t i = size_t(slot[e]);
+      const Element& el = m_.elems[e];
+      Bound(el, &a, &b);
+      box_[i] = {{FloatDown(a.x), FloatDown(a.y), FloatDown(a.z)},
+                {FloatUp(b.x), FloatUp(b.y), FloatUp(b.z)}};
+      const Patch& pa = m_.patches[size_t(el.patch)];
+      const MeshFace& f = m_.faces[size_t(pa.face)];
+      double top = glm::dot(f.normal, m_.verts[size_t(el.v[0])]);
+      for (int k = 1; k < (el.IsTriangle() ? 3 : 4); ++k)
+        top = std::max(top, glm::dot(f.normal, m_.verts[size_t(el.v[k])]));
+      if (m_.patch_tops[size_t(pa.tops_at)] == int32_t(e)) home_[size_t(el.patch)] = int(i / kLeaf);
+      Extend(&levels_[0][i / kLeaf], {a, b, f.normal, f.normal, f.offset, f.normal, top},
+             !made[i / kLeaf]);
+      made[i / kLeaf] = true;
     }
-    FreeStorage(&tops);
+    FreeStorage(&slot);
     while (levels_.back().size() > 1) {
       const std::vector<Box>& below = levels_.back();
       std::vector<Box> up((below.size() + 1) / 2);
@@ -332,7 +358,7 @@ class Grouper {
   }
 
   // May an element in b face patch p: some point of p's box in front of
-  // its plane (Lights, LightsSlot)? Each term of the dot product bounded by
+  // its plane (Lights, LightsBox)? Each term of the dot product bounded by
   // the largest over the corners of the normals' box and p's box, summed
   // in glm::dot's order, less the least offset: rounding is monotonic, so
   // no element b holds is farther in front than this.
@@ -371,7 +397,8 @@ class Grouper {
   // nearer than `width` / kGroupReach (p cannot be in a group that wide
   // then: the least is nearer still), that one.
   double Nearest(int p, double within, double width) {
-    const PatchInfo& in = info_[size_t(p)];
+    const MeshFace& f = Plane(p);
+    const Query s{p, m_.patch_center[size_t(p)], f.normal, f.offset, info_[size_t(p)]};
     double best = within;
     if (order_.empty()) return best;
     // Only candidacy asks no farther than the width (Fits). The full
@@ -388,13 +415,7 @@ class Grouper {
     // them often ends the search at once, or bounds it.
     int found = -1;
     for (int k : recent_)
-      if (k >= 0) {
-        const double dist = BoxDistance(elo_[size_t(k)], ehi_[size_t(k)], in.c);
-        if (dist < best && LightsSlot(p, size_t(k))) {
-          best = dist;
-          found = k;
-        }
-      }
+      if (k >= 0 && Nearer(s, size_t(k), &best)) found = k;
     auto remember = [&] {
       if (found < 0 || std::find(recent_.begin(), recent_.end(), found) != recent_.end()) return;
       std::rotate(recent_.rbegin(), recent_.rbegin() + 1, recent_.rend());
@@ -402,10 +423,9 @@ class Grouper {
     };
     // Then the leaf of p's first element: its neighbours in the tree's
     // order are near it.
-    const IdSpan tops = m_.Tops(p);
-    const int home = tops.size() > 0 ? slot_of_[size_t(tops[0])] / int(kLeaf) : -1;
+    const int home = home_[size_t(p)];
     if (home >= 0 && !(kGroupReach * best < width)) {
-      ScanLeaf(p, home, &best, &found);
+      ScanLeaf(s, home, &best, &found);
       full_leaves_ += full;
     }
     if (kGroupReach * best < width) {
@@ -418,17 +438,17 @@ class Grouper {
     if (!full) {
       stack_.clear();
       Visit root{0, int(levels_.size()) - 1, 0};
-      if (Worth(p, best, &root)) stack_.push_back(root);
+      if (Worth(s, best, &root)) stack_.push_back(root);
       while (!stack_.empty() && found < 0) {
         const Visit v = stack_.back();
         stack_.pop_back();
         if (v.level == 0) {
-          ScanLeaf(p, v.i, &best, &found);
+          ScanLeaf(s, v.i, &best, &found);
           continue;
         }
         const size_t below = levels_[size_t(v.level) - 1].size();
         Visit a{0, v.level - 1, 2 * v.i}, b{0, v.level - 1, 2 * v.i + 1};
-        const bool has_a = Worth(p, best, &a), has_b = size_t(b.i) < below && Worth(p, best, &b);
+        const bool has_a = Worth(s, best, &a), has_b = size_t(b.i) < below && Worth(s, best, &b);
         if (has_a && has_b && (a.d < b.d || (a.d == b.d && home >> a.level == a.i)))
           std::swap(a, b);
         if (has_a) stack_.push_back(a);
@@ -442,7 +462,7 @@ class Grouper {
     heap_.clear();
     auto push = [&](int level, int i) {
       Visit v{0, level, i};
-      if (!Worth(p, best, &v)) return;
+      if (!Worth(s, best, &v)) return;
       heap_.push_back(v);
       std::push_heap(heap_.begin(), heap_.end(), Farther);
     };
@@ -452,7 +472,7 @@ class Grouper {
       const Visit v = heap_.back();
       heap_.pop_back();
       if (v.level == 0) {
-        ScanLeaf(p, v.i, &best, &found);
+        ScanLeaf(s, v.i, &best, &found);
         ++full_leaves_;
         if (kGroupReach * best < width) break;
         continue;
@@ -469,25 +489,35 @@ class Grouper {
   // slab: bounded with slack_ to spare, no corner farther in front than
   // eps_, as Lights computes it), not facing away.
   // Sets v's distance.
-  bool Worth(int p, double best, Visit* v) const {
-    const PatchInfo& in = info_[size_t(p)];
+  bool Worth(const Query& s, double best, Visit* v) const {
     const Box& b = levels_[size_t(v->level)][size_t(v->i)];
-    v->d = BoxDistance(b.lo, b.hi, in.c);
-    return v->d < best && Side(b.lo, b.hi, in.n, in.offset) >= 0 && MayFace(b, in) &&
-           b.top + Support(in.n - b.nr, b.lo, b.hi) - in.offset > eps_ - slack_;
+    v->d = BoxDistance(b.lo, b.hi, s.c);
+    return v->d < best && Side(b.lo, b.hi, s.n, s.offset) >= 0 && MayFace(b, s.in) &&
+           b.top + Support(s.n - b.nr, b.lo, b.hi) - s.offset > eps_ - slack_;
   }
 
-  // The elements of leaf i that p lights nearer than *best: *best the
+  // The elements of leaf i that s lights nearer than *best: *best the
   // nearest one's distance, *found its place.
-  void ScanLeaf(int p, int i, double* best, int* found) const {
-    const PatchInfo& in = info_[size_t(p)];
-    for (size_t k = size_t(i) * kLeaf, end = std::min(order_.size(), k + kLeaf); k < end; ++k) {
-      const double dist = BoxDistance(elo_[k], ehi_[k], in.c);
-      if (dist < *best && LightsSlot(p, k)) {
-        *best = dist;
-        *found = int(k);
-      }
-    }
+  void ScanLeaf(const Query& s, int i, double* best, int* found) const {
+    for (size_t k = size_t(i) * kLeaf, end = std::min(order_.size(), k + kLeaf); k < end; ++k)
+      if (Nearer(s, k, best)) *found = int(k);
+  }
+
+  // Whether s lights the element at place k of the tree's order nearer
+  // than *best, by its bounding box in double: then *best is that
+  // distance. Its float box (box_) rules out most at once, nearer by
+  // rounding as it may be; only the rest are read from the mesh.
+  bool Nearer(const Query& s, size_t k, double* best) const {
+    const FloatBox& fb = box_[k];
+    if (!(BoxDistance(glm::dvec3(fb.lo), glm::dvec3(fb.hi), s.c) < *best)) return false;
+    const Element& el = m_.elems[size_t(order_[k])];
+    if (el.patch == s.p) return false;
+    glm::dvec3 lo, hi;
+    Bound(el, &lo, &hi);
+    const double dist = BoxDistance(lo, hi, s.c);
+    if (!(dist < *best) || !LightsBox(s, el, lo, hi)) return false;
+    *best = dist;
+    return true;
   }
 
   // Where box lo, hi lies against plane dot(n, x) == offset: +1 wholly in
@@ -502,49 +532,44 @@ class Grouper {
     return glm::dot(n, near) - offset > eps_ ? 1 : 0;
   }
 
-  // Lights(p, e) for the element at place k of the tree's order: decided
-  // from the two bounding boxes where they lie wholly on one side of the
-  // other's plane, from the corners only where they do not.
-  bool LightsSlot(int p, size_t k) const {
-    const int q = patch_of_[k];
-    if (q == p) return false;
-    const PatchInfo& in = info_[size_t(p)];
-    const int front = Side(elo_[k], ehi_[k], in.n, in.offset);
+  // Lights(s, el) for element el of another patch, its bounding box lo,
+  // hi: decided from the two bounding boxes where they lie wholly on one
+  // side of the other's plane, from the corners only where they do not.
+  bool LightsBox(const Query& s, const Element& el, const glm::dvec3& lo,
+                 const glm::dvec3& hi) const {
+    const int front = Side(lo, hi, s.n, s.offset);
     if (front < 0) return false;
-    const PatchInfo& other = info_[size_t(q)];
-    const int back = Side(in.lo, in.hi, other.n, other.offset);
+    const MeshFace& other = Plane(el.patch);
+    const int back = Side(s.in.lo, s.in.hi, other.normal, other.offset);
     if (back < 0) return false;
     if (front > 0 && back > 0) return true;
-    return Lights(p, order_[k]);
+    return Lights(s, el);
   }
 
-  // May light from patch p reach element e: e of another patch, some
-  // corner of e in front of p, some corner of p in front of e.
-  bool Lights(int p, int e) const {
-    const Element& el = m_.elems[size_t(e)];
-    if (el.patch == p) return false;
-    const PatchInfo& in = info_[size_t(p)];
+  // May light from patch s.p reach element el of another patch: some
+  // corner of el in front of s.p, some corner of s.p in front of el.
+  bool Lights(const Query& s, const Element& el) const {
     bool front = false;
     for (int k = 0; k < (el.IsTriangle() ? 3 : 4) && !front; ++k)
-      front = glm::dot(in.n, m_.verts[el.v[k]]) - in.offset > eps_;
+      front = glm::dot(s.n, m_.verts[size_t(el.v[k])]) - s.offset > eps_;
     if (!front) return false;
-    const PatchInfo& f = info_[size_t(el.patch)];  // its face's plane
-    for (int v : Corners(in))
-      if (glm::dot(f.n, m_.verts[v]) - f.offset > eps_) return true;
-    return false;
+    const MeshFace& f = Plane(el.patch);
+    return AnyCorner(s.p,
+                     [&](const glm::dvec3& v) { return glm::dot(f.normal, v) - f.offset > eps_; });
   }
 
   // May a and b shoot as one, as far as their planes tell? The rule of
   // groups.h but the segment between them (Clear).
   bool Alike(int a, int b) const {
-    const PatchInfo& A = info_[a];
-    const PatchInfo& B = info_[b];
-    if (glm::dot(A.n, B.n) < std::cos(kGroupAngle * M_PI / 180)) return false;
-    for (int v : Corners(B))
-      if (glm::dot(A.n, m_.verts[v]) - A.offset < -tau_) return false;
-    for (int v : Corners(A))
-      if (glm::dot(B.n, m_.verts[v]) - B.offset < -tau_) return false;
-    return true;
+    const MeshFace& A = Plane(a);
+    const MeshFace& B = Plane(b);
+    if (glm::dot(A.normal, B.normal) < std::cos(kGroupAngle * M_PI / 180)) return false;
+    // Some corner of patch p behind f's plane by more than tau_.
+    auto behind = [&](const MeshFace& f, int p) {
+      return AnyCorner(
+          p, [&](const glm::dvec3& v) { return glm::dot(f.normal, v) - f.offset < -tau_; });
+    };
+    return !behind(A, b) && !behind(B, a);
   }
 
   // Every element by the cells of C_ its bounding box overlaps (in the
@@ -557,15 +582,18 @@ class Grouper {
   // floor's dozens of elements in a cell at a fine tessellation, under
   // every segment between two floor patches.
   void IndexGrid() {
+    stamp_.assign(m_.elems.size(), 0);
+    glm::dvec3 lo, hi;
     for (size_t k = 0; k < order_.size(); ++k) {
-      const Cell a = CellOf(elo_[k], C_), b = CellOf(ehi_[k], C_);
+      Bound(m_.elems[size_t(order_[k])], &lo, &hi);
+      const Cell a = CellOf(lo, C_), b = CellOf(hi, C_);
       for (int64_t x = a.x; x <= b.x; ++x)
         for (int64_t y = a.y; y <= b.y; ++y)
           for (int64_t z = a.z; z <= b.z; ++z) grid_[{x, y, z}].push_back(order_[k]);
     }
     auto plane = [&](int e) {
-      const PatchInfo& f = info_[size_t(m_.elems[size_t(e)].patch)];
-      return std::array<double, 4>{f.n.x, f.n.y, f.n.z, f.offset};
+      const MeshFace& f = Plane(m_.elems[size_t(e)].patch);
+      return std::array<double, 4>{f.normal.x, f.normal.y, f.normal.z, f.offset};
     };
     std::vector<int> runs;
     for (auto& cell : grid_) {
@@ -587,8 +615,8 @@ class Grouper {
   // (Amanatides & Woo), hold every element it could cross.
   bool Clear(int a, int b) {
     if (grid_.empty()) IndexGrid();
-    const glm::dvec3 P = info_[a].c + lift_ * info_[a].n;
-    const glm::dvec3 Q = info_[b].c + lift_ * info_[b].n;
+    const glm::dvec3 P = m_.patch_center[size_t(a)] + lift_ * Plane(a).normal;
+    const glm::dvec3 Q = m_.patch_center[size_t(b)] + lift_ * Plane(b).normal;
     const glm::dvec3 d = Q - P;
     Cell c = CellOf(P, C_);
     const Cell end = CellOf(Q, C_);
@@ -612,8 +640,8 @@ class Grouper {
         for (size_t r = 0, len; r < list.size(); r += 1 + len) {
           len = size_t(-list[r]);
           // Crosses' first test, for the run's plane.
-          const PatchInfo& f = info_[size_t(m_.elems[size_t(list[r + 1])].patch)];
-          const double sp = glm::dot(f.n, P) - f.offset, sq = glm::dot(f.n, Q) - f.offset;
+          const MeshFace& f = Plane(m_.elems[size_t(list[r + 1])].patch);
+          const double sp = glm::dot(f.normal, P) - f.offset, sq = glm::dot(f.normal, Q) - f.offset;
           if ((sp > 0) == (sq > 0) || sp == sq) continue;
           for (size_t k = r + 1; k <= r + len; ++k) {
             const int e = list[k];
@@ -635,8 +663,8 @@ class Grouper {
   bool Crosses(int e, const glm::dvec3& P, const glm::dvec3& Q, int a, int b) const {
     const Element& el = m_.elems[e];
     if (el.patch == a || el.patch == b) return false;
-    const PatchInfo& f = info_[size_t(el.patch)];  // its face's plane
-    const double sp = glm::dot(f.n, P) - f.offset, sq = glm::dot(f.n, Q) - f.offset;
+    const MeshFace& f = Plane(el.patch);
+    const double sp = glm::dot(f.normal, P) - f.offset, sq = glm::dot(f.normal, Q) - f.offset;
     if ((sp > 0) == (sq > 0) || sp == sq) return false;
     const glm::dvec3 X = P + (Q - P) * (sp / (sp - sq));
     const int n = el.IsTriangle() ? 3 : 4;
@@ -645,7 +673,7 @@ class Grouper {
     for (int k = 0; k < n; ++k) {
       const glm::dvec3& u = m_.verts[el.v[k]];
       const glm::dvec3& w = m_.verts[el.v[(k + 1) % n]];
-      if (glm::dot(glm::cross(w - u, X - u), f.n) < -1e-12 * P2) return false;
+      if (glm::dot(glm::cross(w - u, X - u), f.normal) < -1e-12 * P2) return false;
     }
     return true;
   }
@@ -654,9 +682,7 @@ class Grouper {
   double G_, C_, tau_, lift_, eps_;
   double slack_ = 0;  // what rounding may take from a slab's bound (BuildTree)
   std::vector<PatchInfo> info_;
-  std::vector<int32_t> corners_;     // the patches' corners, patch by patch (PatchInfo)
   Grid grid_;                        // elements by the cells of C_ they overlap (Clear)
-  std::vector<glm::dvec3> elo_, ehi_;  // their bounding boxes, in order_
   static constexpr size_t kLeaf = 32;        // elements to a leaf of the tree
   // A Morton code's bits an axis, above an element's id (kMaxElements).
   static constexpr int kAxisBits = 13, kIdBits = 24;
@@ -664,8 +690,8 @@ class Grouper {
   bool by_facing_ = false;                   // the tree's order (BuildTree)
   size_t full_leaves_ = 0;                   // leaves the full searches scanned (Nearest)
   std::vector<int> order_;                   // elements in the tree's order
-  std::vector<int> patch_of_;                // ... and their patches
-  std::vector<int> slot_of_;                 // each element's place in order_
+  std::vector<FloatBox> box_;                // ... and their bounding boxes
+  std::vector<int> home_;                    // per patch: the leaf of its first top element
   std::vector<std::vector<Box>> levels_;     // the tree's boxes: leaves first, root last
   // Deeper first among equally near (many boxes hold p's centre): down to
   // a leaf rather than across the tree.
@@ -679,6 +705,15 @@ class Grouper {
 };
 
 }  // namespace
+
+float FloatDown(double x) {
+  // Out of float's range: the largest float, or -inf (a plain cast is
+  // undefined there).
+  const float f = x > double(FLT_MAX) ? FLT_MAX : x < -double(FLT_MAX) ? -HUGE_VALF : float(x);
+  return double(f) > x ? std::nextafter(f, -HUGE_VALF) : f;
+}
+
+float FloatUp(double x) { return -FloatDown(-x); }
 
 void FormGroups(const MeshOptions& opts, Mesh* mesh) {
   mesh->groups.clear();

@@ -41,7 +41,10 @@
 // travels with its first member's assignment (protocol.h, Assignment),
 // which Hemicube::Column takes instead of reading Mesh::group_of.
 //
-// Numbers: double, as the mesh's geometry.
+// Numbers: double, as the mesh's geometry; the search keeps its element
+// boxes in float, rounded outward, only to rule elements out (an element
+// it does not rule out is measured in double, so the groups are those of
+// boxes in double).
 #ifndef RADIOSITY_GROUPS_H
 #define RADIOSITY_GROUPS_H
 
@@ -58,6 +61,13 @@ constexpr int kLookAhead = 512;       // candidates looked at past a group's fir
 // groups when !opts.groups). Subdivision divides elements, not patches,
 // so the groups hold for the whole run.
 void FormGroups(const MeshOptions& opts, Mesh* mesh);
+
+// x rounded to a float at or below it (FloatDown) or at or above it
+// (FloatUp), beyond float's range too: the group search's element boxes
+// in float hold the boxes in double, so that no element is nearer than
+// its float box says (groups.cpp).
+float FloatDown(double x);
+float FloatUp(double x);
 
 // The group patch p shoots for, or null when p shoots alone. Only a
 // group's first member is a shooter (Solver::Select, the hemicube); the

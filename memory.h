@@ -14,14 +14,16 @@
 
 // The master: mesh, solver, subdivision's adjacency, the hemicube (-j 0)
 // or the scene frame (with workers), the pictures at the end of a wave.
-// Measured at 1.06 M elements: 269 with -j 0 and 248 with -j 1 over 2
-// shots (278 and 254 at 55bde76), but 456 and 462 in a first wave that
-// divided and split 263,927
-// patches into 537,470 (its division pass: the adjacency, the solver
-// grown for the children and the pieces): the rate is that, with about
-// 13% room, since subdivision's limit (app.cpp) takes it as the cost of
-// every element.
-constexpr double kMasterBytesPerElement = 520;
+// Measured at 1.06 M elements with shooter groups (the default): 263 to
+// 264 with -j 0 and 249 to 250 with -j 1 over 2 shots (336 and 336 at
+// 7afbefc, when the group search at start-up was the peak), but 412 to 415 and
+// 416 to 417 in a first wave that divided and split 263,927 patches into
+// 537,470 (its division pass: the adjacency, the solver grown for the
+// children and the pieces; 421 to 424 and 428 to 429 without groups):
+// the rate is the highest of these, 429, with about 13% room, since
+// subdivision's limit (app.cpp) takes it as the cost of every element
+// (520 at 7afbefc, from that pass's 462 at 0cd4817).
+constexpr double kMasterBytesPerElement = 490;
 // A worker: the mesh, its adjacency once divisions come, the hemicube.
 // It forms no shooter groups (the master sends them with the work), so
 // groups or not it measured the same: 147 to 148 over 2 shots, at the

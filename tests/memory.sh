@@ -7,7 +7,7 @@
 . "$(dirname "$0")/lib.sh"
 ROOM=$(dirname "$0")/../scenes/room.obj
 
-# The room cut fine: about 1.1e6 elements, 0.58 GB at the master's rate.
+# The room cut fine: about 1.1e6 elements, 0.55 GB at the master's rate.
 (ulimit -v 400000; "$RADIOSITY" -j 0 -q -o "$T/big" --patch-size 0.04 "$ROOM" >"$T/out" 2>"$T/err")
 status=$?
 lines=$(wc -l <"$T/err")
