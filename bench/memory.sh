@@ -13,7 +13,7 @@
 # varies from run to run.
 # BEFORE, if set, is another binary run side by side (same scene, back to
 # back: the machine is noisy); ARGS, if set, more options for every run
-# (ARGS=--no-groups: forming groups takes minutes at 10^6 elements).
+# (ARGS=--no-groups: the figures without shooter groups).
 #   bash bench/memory.sh [N...]           (default 200 2000 20000 50000)
 #   BEFORE=/tmp/before/radiosity ARGS=--no-groups bash bench/memory.sh 40000
 cd "$(dirname "$0")/.." || exit 1
