@@ -6,6 +6,8 @@
 #include <cstring>
 #include <utility>
 
+#include <emmintrin.h>  // SSE2: baseline x86-64
+
 #include "check.h"
 #include "clock.h"
 #include "groups.h"
@@ -361,7 +363,30 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
     lz[nv] = float(glm::dot(d, n_));
     ++nv;
   };
-  for (int i = cf.vb; i < cf.ve; ++i) put(mesh.verts[i]);
+  // Two vertices at a time in SSE2, the same operations in the same order
+  // as put's (glm::dot sums (x + y) + z; packed and scalar IEEE operations
+  // round alike): the compiler's own vectorising of put, four vertices
+  // at a time, spent about 60 instructions a face in setup and a
+  // face has about six vertices.
+  {
+    __m128d f[12];
+    for (int j = 0; j < 12; ++j) f[j] = _mm_load_pd(frame_[j]);
+    static_assert(sizeof(glm::dvec3) == 3 * sizeof(double), "verts: x, y, z, x, ...");
+    const double* p = &mesh.verts[cf.vb].x;
+    for (; nv + 2 <= cf.ve - cf.vb; nv += 2, p += 6) {
+      const __m128d dx = _mm_sub_pd(_mm_loadh_pd(_mm_load_sd(p), p + 3), f[0]);
+      const __m128d dy = _mm_sub_pd(_mm_loadh_pd(_mm_load_sd(p + 1), p + 4), f[1]);
+      const __m128d dz = _mm_sub_pd(_mm_loadh_pd(_mm_load_sd(p + 2), p + 5), f[2]);
+      auto dot = [&](int a) {
+        const __m128d s = _mm_add_pd(_mm_mul_pd(dx, f[a]), _mm_mul_pd(dy, f[a + 1]));
+        return _mm_cvtpd_ps(_mm_add_pd(s, _mm_mul_pd(dz, f[a + 2])));
+      };
+      _mm_storel_pi(reinterpret_cast<__m64*>(lx + nv), dot(3));
+      _mm_storel_pi(reinterpret_cast<__m64*>(ly + nv), dot(6));
+      _mm_storel_pi(reinterpret_cast<__m64*>(lz + nv), dot(9));
+    }
+  }
+  for (int i = cf.vb + nv; i < cf.ve; ++i) put(mesh.verts[i]);
   if (cf.nd)
     for (int i : mesh.DivideVerts(mesh.faces[cf.face])) put(mesh.verts[i]);
   uint32_t all = ~0u, any = 0;
@@ -550,6 +575,10 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
   std::fill(tile_min_.begin(), tile_min_.end(), 0.0f);
   std::fill(dirty_.begin(), dirty_.end(), 0);
   visited_ = 0;
+  {
+    const double fr[12] = {c_.x, c_.y, c_.z, u_.x, u_.y, u_.z, v_.x, v_.y, v_.z, n_.x, n_.y, n_.z};
+    for (int i = 0; i < 12; ++i) frame_[i][0] = frame_[i][1] = fr[i];
+  }
 
   // Faces that face the shooter into the item buffers. With stats, the
   // clock is read twice a face: {last reading, transform, raster} (the

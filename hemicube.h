@@ -177,6 +177,7 @@ class Hemicube {
 
   // Per column: the shooter's frame and per-face scratch.
   glm::dvec3 c_{0.0}, u_{0.0}, v_{0.0}, n_{0.0};
+  alignas(16) double frame_[12][2];  // c_, u_, v_, n_ by component, twice (DrawFace's pairs)
   float near_ = 0;
   double coplanar_ = 0, margin_ = 0;
   int32_t self_ = -1;                // the shooter's group (its members are skipped), or -1
