@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <tuple>
 #include <utility>
 
 #include <emmintrin.h>  // SSE2: baseline x86-64
@@ -177,27 +178,30 @@ inline int64_t FirstPixel(int64_t x) { return (x - 32768 + 65535) >> 16; }
 
 }  // namespace
 
-// Fills the convex polygon pt[0..n) (pixel coordinates) of face `face`
-// with leaf `rank`, depth 1/d = za*X + zb*Y + zc: pixel centres in
-// [left, right) x [top, bottom), so shared edges give each pixel to one side.
-// A tie in depth goes to the lower rank, the leaf first in face order, so
-// that the buffer ends the same whatever order the leaves come in. With
-// `cull`, a leaf Hidden finds unable to win a pixel is left undrawn, from
-// the bounding box found here (one pass over the corners for both).
-void Hemicube::Scan(int face, const float (*pt)[2], int n, float za, float zb,
-                    float zc, int32_t rank, bool cull) {
-  const int R = res_, H = face == 0 ? R : R / 2;
-  int top = 0, bottom = 0;
-  float x0 = pt[0][0], x1 = x0;
+inline Hemicube::Extent Hemicube::Bounds(const float (*pt)[2], int n, int H) {
+  if (n < 3) __builtin_unreachable();  // a polygon (and so pt[0] was set)
+  Extent e;
+  e.x0 = e.x1 = pt[0][0];
   for (int i = 1; i < n; ++i) {
-    if (pt[i][1] < pt[top][1]) top = i;
-    if (pt[i][1] > pt[bottom][1]) bottom = i;
-    x0 = std::min(x0, pt[i][0]);
-    x1 = std::max(x1, pt[i][0]);
+    if (pt[i][1] < pt[e.top][1]) e.top = i;
+    if (pt[i][1] > pt[e.bottom][1]) e.bottom = i;
+    e.x0 = std::min(e.x0, pt[i][0]);
+    e.x1 = std::max(e.x1, pt[i][0]);
   }
-  const auto [ya, yb] = Rows(pt[top][1], pt[bottom][1], H);
-  if (ya >= yb) return;
-  if (cull && Hidden(face, x0, x1, pt[top][1], pt[bottom][1], za, zb, zc)) return;
+  std::tie(e.ya, e.yb) = Rows(pt[e.top][1], pt[e.bottom][1], H);
+  return e;
+}
+
+// Fills the convex polygon pt[0..n) (pixel coordinates) of face `face`,
+// its extent e holding some rows (Bounds), with leaf `rank`, depth 1/d =
+// za*X + zb*Y + zc: pixel centres in [left, right) x [top, bottom), so
+// shared edges give each pixel to one side. A tie in depth goes to the
+// lower rank, the leaf first in face order, so that the buffer ends the
+// same whatever order the leaves come in.
+void Hemicube::Scan(int face, const float (*pt)[2], int n, const Extent& e, float za,
+                    float zb, float zc, int32_t rank) {
+  const int R = res_, H = face == 0 ? R : R / 2;
+  const int top = e.top, bottom = e.bottom, ya = e.ya, yb = e.yb;
   float* depth = depth_.data() + (face == 0 ? 0 : size_t(R) * R + size_t(face - 1) * H * R);
   int32_t* item = item_.data() + (depth - depth_.data());
   const int tw = (R + kTile - 1) / kTile;
@@ -484,12 +488,19 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
         const int h = __builtin_ctz(todo);
         if ((all >> (5 * h)) & 31) continue;  // wholly outside one plane of face h
         float pt[9][2];  // an 8-gon clipped by one plane
+        const int rows = h == 0 ? res_ : res_ / 2;
         if (!((any >> (5 * h)) & kNear)) {
           for (int i = 0; i < n; ++i) {
             pt[i][0] = sx_[h][vid[i]];
             pt[i][1] = sy_[h][vid[i]];
           }
-          Scan(h, pt, n, za[h], zb[h], zc[h], r, culling_);
+          // Most leaves of a finely cut scene hold no row centre, or no
+          // pixel centre (Hidden): tested here, without a call to Scan.
+          const Extent e = Bounds(pt, n, rows);
+          if (e.ya >= e.yb) continue;
+          if (culling_ && Hidden(h, e.x0, e.x1, pt[e.top][1], pt[e.bottom][1], za[h], zb[h], zc[h]))
+            continue;
+          Scan(h, pt, n, e, za[h], zb[h], zc[h], r);
           continue;
         }
         // Crosses the near plane: clip in this face's frame, then project.
@@ -524,7 +535,8 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
           pt[i][0] = poly[i][0] * inv + half;
           pt[i][1] = poly[i][1] * inv + yoff;
         }
-        Scan(h, pt, m, za[h], zb[h], zc[h], r, false);
+        const Extent e = Bounds(pt, m, rows);
+        if (e.ya < e.yb) Scan(h, pt, m, e, za[h], zb[h], zc[h], r);
       }
     }
   };

@@ -139,8 +139,15 @@ class Hemicube {
   // Its vertices into the shooter's frame, its leaves into the buffers of
   // the hemicube faces in `mask`; adds to clock's stages when non-null.
   void DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock);
-  void Scan(int face, const float (*pt)[2], int n, float za, float zb, float zc,
-            int32_t rank, bool cull);
+  // A polygon's first topmost and bottommost corners, its x range and the
+  // rows it covers (Rows): for the tests before Scan, and for Scan.
+  struct Extent {
+    int top = 0, bottom = 0, ya = 0, yb = 0;
+    float x0 = 0, x1 = 0;
+  };
+  static Extent Bounds(const float (*pt)[2], int n, int H);
+  void Scan(int face, const float (*pt)[2], int n, const Extent& e, float za, float zb,
+            float zc, int32_t rank);
 
   int res_;
   bool culling_ = true;
