@@ -276,21 +276,16 @@ bool Hemicube::Open(int h, int xa, int xb, int ra, int rb, float zt) {
   return false;
 }
 
-// Whether a leaf on face h, its pixel bounding box [x0, x1] x [y0, y1]
-// holding some of the face's rows, could win no pixel, so that Scan need
-// not draw it: no pixel centre within that box (most leaves of a finely
-// cut scene, smaller than a pixel), or, for a large leaf (pixel bounding
-// box of kHiddenArea or more), wholly behind what face h holds: its
-// nearest depth over that box (the plane's at a corner, in double, raised
-// well past Scan's float rounding) against the tiles, as Visible tests
-// boxes. A leaf left undrawn could not have written a pixel, so the buffer
-// is as drawing it would have left it.
+// Whether a large leaf on face h (pixel bounding box [x0, x1] x [y0, y1]
+// of kHiddenArea or more, holding some of the face's rows) could win no
+// pixel, so that Scan need not draw it: wholly behind what face h holds,
+// its nearest depth over that box (the plane's at a corner, in double,
+// raised well past Scan's float rounding) against the tiles, as Visible
+// tests boxes. A leaf left undrawn could not have written a pixel, so the
+// buffer is as drawing it would have left it.
 bool Hemicube::Hidden(int h, float x0, float x1, float y0, float y1, float za, float zb,
                       float zc) {
-  constexpr double kHiddenArea = 64;
   const int R = res_, H = h == 0 ? R : R / 2;
-  if (y1 - y0 < 8 && NoPixelCentre(x0, x1, R)) return true;
-  if (!(double(x1 - x0) * double(y1 - y0) >= kHiddenArea)) return false;
   const int xa = std::max(0, int(std::floor(std::max(x0, -2.0f))) - 1);
   const int xb = std::min(R, int(std::ceil(std::min(x1, R + 2.0f))) + 1);
   const int ra = std::max(0, int(std::floor(std::max(y0, -2.0f))) - 1);
@@ -494,11 +489,15 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
             pt[i][0] = sx_[h][vid[i]];
             pt[i][1] = sy_[h][vid[i]];
           }
-          // Most leaves of a finely cut scene hold no row centre, or no
-          // pixel centre (Hidden): tested here, without a call to Scan.
+          // Most leaves of a finely cut scene, smaller than a pixel, hold
+          // no row centre or no pixel centre: tested here, without a call.
+          // A leaf left undrawn could not have written a pixel.
           const Extent e = Bounds(pt, n, rows);
           if (e.ya >= e.yb) continue;
-          if (culling_ && Hidden(h, e.x0, e.x1, pt[e.top][1], pt[e.bottom][1], za[h], zb[h], zc[h]))
+          const float y0 = pt[e.top][1], y1 = pt[e.bottom][1];
+          if (culling_ && ((y1 - y0 < 8 && NoPixelCentre(e.x0, e.x1, res_)) ||
+                           (double(e.x1 - e.x0) * double(y1 - y0) >= kHiddenArea &&
+                            Hidden(h, e.x0, e.x1, y0, y1, za[h], zb[h], zc[h]))))
             continue;
           Scan(h, pt, n, e, za[h], zb[h], zc[h], r);
           continue;

@@ -135,6 +135,9 @@ class Hemicube {
   // wholly behind the shooter, outside the face or behind its buffer.
   uint32_t Visible(const glm::dvec3& lo, const glm::dvec3& hi);
   bool Open(int h, int xa, int xb, int ra, int rb, float zt);
+  // Leaves whose pixel box is this large or larger are tested against the
+  // tiles before they are drawn (Hidden).
+  static constexpr double kHiddenArea = 64;
   bool Hidden(int h, float x0, float x1, float y0, float y1, float za, float zb, float zc);
   // Its vertices into the shooter's frame, its leaves into the buffers of
   // the hemicube faces in `mask`; adds to clock's stages when non-null.
