@@ -408,24 +408,24 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
   if (mask & 1)
     for (int i = 0; i < nv; ++i) {
       const float iz = half / lz[i];
-      sx_[0][i] = lx[i] * iz + half;
-      sy_[0][i] = ly[i] * iz + half;
+      sxy_[0][i][0] = lx[i] * iz + half;
+      sxy_[0][i][1] = ly[i] * iz + half;
     }
   if (mask & 6)
     for (int i = 0; i < nv; ++i) {
       const float ix = half / lx[i];
-      sx_[1][i] = ly[i] * ix + half;
-      sy_[1][i] = lz[i] * ix;
-      sx_[2][i] = -ly[i] * ix + half;
-      sy_[2][i] = -lz[i] * ix;
+      sxy_[1][i][0] = ly[i] * ix + half;
+      sxy_[1][i][1] = lz[i] * ix;
+      sxy_[2][i][0] = -ly[i] * ix + half;
+      sxy_[2][i][1] = -lz[i] * ix;
     }
   if (mask & 24)
     for (int i = 0; i < nv; ++i) {
       const float iy = half / ly[i];
-      sx_[3][i] = lx[i] * iy + half;
-      sy_[3][i] = lz[i] * iy;
-      sx_[4][i] = -lx[i] * iy + half;
-      sy_[4][i] = -lz[i] * iy;
+      sxy_[3][i][0] = lx[i] * iy + half;
+      sxy_[3][i][1] = lz[i] * iy;
+      sxy_[4][i][0] = -lx[i] * iy + half;
+      sxy_[4][i][1] = -lz[i] * iy;
     }
   // Nor does one where the face's pixel box, all in front of the near
   // plane, holds no pixel centre: Scan finds none in any leaf's box, which
@@ -435,12 +435,13 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
     for (uint32_t todo = mask; todo; todo &= todo - 1) {
       const int h = __builtin_ctz(todo);
       if ((any >> (5 * h)) & kNear) continue;
-      float x0 = sx_[h][0], x1 = x0, y0 = sy_[h][0], y1 = y0;
+      const auto* s = sxy_[h].data();
+      float x0 = s[0][0], x1 = x0, y0 = s[0][1], y1 = y0;
       for (int i = 1; i < nv; ++i) {
-        x0 = std::min(x0, sx_[h][i]);
-        x1 = std::max(x1, sx_[h][i]);
-        y0 = std::min(y0, sy_[h][i]);
-        y1 = std::max(y1, sy_[h][i]);
+        x0 = std::min(x0, s[i][0]);
+        x1 = std::max(x1, s[i][0]);
+        y0 = std::min(y0, s[i][1]);
+        y1 = std::max(y1, s[i][1]);
       }
       const auto [ya, yb] = Rows(y0, y1, h == 0 ? res_ : res_ / 2);
       if (ya >= yb || (y1 - y0 < 8 && NoPixelCentre(x0, x1, res_))) mask &= ~(1u << h);
@@ -488,8 +489,8 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
         const int rows = h == 0 ? res_ : res_ / 2;
         if (!((any >> (5 * h)) & kNear)) {
           for (int i = 0; i < n; ++i) {
-            pt[i][0] = sx_[h][vid[i]];
-            pt[i][1] = sy_[h][vid[i]];
+            pt[i][0] = sxy_[h][vid[i]][0];
+            pt[i][1] = sxy_[h][vid[i]][1];
           }
           // Most leaves of a finely cut scene, smaller than a pixel, hold
           // no row centre or no pixel centre: tested here, without a call.
@@ -528,7 +529,7 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
           }
         }
         if (m < 3) continue;
-        // The same arithmetic as sx_, sy_, so unclipped corners match it bit
+        // The same arithmetic as sxy_, so unclipped corners match it bit
         // for bit and neighbours stay watertight.
         const float yoff = h == 0 ? half : 0.0f;
         for (int i = 0; i < m; ++i) {

@@ -27,6 +27,7 @@
 #ifndef RADIOSITY_HEMICUBE_H
 #define RADIOSITY_HEMICUBE_H
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -194,7 +195,9 @@ class Hemicube {
   std::vector<int> self_faces_;      // the mesh faces of its members, sorted
   std::vector<float> lx_, ly_, lz_;  // face vertices in the shooter frame
   std::vector<uint32_t> code_;       // outcodes per vertex, 5 bits per face
-  std::vector<float> sx_[5], sy_[5]; // pixel x, y on each hemicube face
+  // Pixel x, y on each hemicube face, side by side: a leaf's corner is
+  // gathered by one load.
+  std::vector<std::array<float, 2>> sxy_[5];
   std::vector<int> stack_;
   // Form factors summed per element, sparse: a block of kSumBlock sums for
   // each kSumBlock elements a column reaches, not 8 bytes for every

@@ -179,8 +179,7 @@ void Hemicube::BuildCache(const Mesh& mesh) {
   for (auto* a : {&lx_, &ly_, &lz_}) a->resize(most);
   code_.resize(most);
   for (int h = 0; h < 5; ++h) {
-    sx_[h].resize(most);
-    sy_[h].resize(most);
+    sxy_[h].resize(most);
   }
   acc_.clear();
   block_.assign((mesh.elems.size() + kSumBlock - 1) / kSumBlock, -1);
