@@ -322,7 +322,7 @@ uint32_t Hemicube::Visible(const glm::dvec3& lo, const glm::dvec3& hi) {
   uint32_t mask = 0;
   // Face h of (a, b, d) as ToFace orders them, d along the face's axis;
   // inline for each h, so that the faces' differences fold away (a loop
-  // over h with a switch cost a third of the calls' instructions).
+  // over h with a switch took a quarter more instructions).
   auto face = [&](auto hc, double a0, double a1, double b0, double b1, double d0,
                   double d1) __attribute__((always_inline)) {
     constexpr int h = decltype(hc)::value;
@@ -589,7 +589,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, double angle,
   std::fill(tile_min_.begin(), tile_min_.end(), 0.0f);
   std::fill(dirty_.begin(), dirty_.end(), 0);
   visited_ = 0;
-  {
+  {  // the frame as DrawFace's transform reads it, two of each
     const double fr[12] = {c_.x, c_.y, c_.z, u_.x, u_.y, u_.z, v_.x, v_.y, v_.z, n_.x, n_.y, n_.z};
     for (int i = 0; i < 12; ++i) frame_[i][0] = frame_[i][1] = fr[i];
   }
