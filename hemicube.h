@@ -27,6 +27,7 @@
 #ifndef RADIOSITY_HEMICUBE_H
 #define RADIOSITY_HEMICUBE_H
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -138,12 +139,22 @@ class Hemicube {
   // wholly behind the shooter, outside the face or behind its buffer.
   uint32_t Visible(const glm::dvec3& lo, const glm::dvec3& hi);
   bool Open(int h, int xa, int xb, int ra, int rb, float zt);
+  // Leaves whose pixel box is this large or larger are tested against the
+  // tiles before they are drawn (Hidden).
+  static constexpr double kHiddenArea = 64;
   bool Hidden(int h, float x0, float x1, float y0, float y1, float za, float zb, float zc);
   // Its vertices into the shooter's frame, its leaves into the buffers of
   // the hemicube faces in `mask`; adds to clock's stages when non-null.
   void DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock);
-  void Scan(int face, const float (*pt)[2], int n, float za, float zb, float zc,
-            int32_t rank, bool cull);
+  // A polygon's first topmost and bottommost corners, its x range and the
+  // rows it covers (Rows): for the tests before Scan, and for Scan.
+  struct Extent {
+    int top = 0, bottom = 0, ya = 0, yb = 0;
+    float x0 = 0, x1 = 0;
+  };
+  static Extent Bounds(const float (*pt)[2], int n, int H);
+  void Scan(int face, const float (*pt)[2], int n, const Extent& e, float za, float zb,
+            float zc, int32_t rank);
 
   int res_;
   bool culling_ = true;
@@ -180,13 +191,16 @@ class Hemicube {
 
   // Per column: the shooter's frame and per-face scratch.
   glm::dvec3 c_{0.0}, u_{0.0}, v_{0.0}, n_{0.0};
+  alignas(16) double frame_[12][2];  // c_, u_, v_, n_ by component, twice (DrawFace's pairs)
   float near_ = 0;
   double coplanar_ = 0, margin_ = 0;
   const PatchGroup* self_ = nullptr;  // in a column: the shooter's group (its members are skipped), or null
   std::vector<int> self_faces_;      // the mesh faces of its members, sorted
   std::vector<float> lx_, ly_, lz_;  // face vertices in the shooter frame
   std::vector<uint32_t> code_;       // outcodes per vertex, 5 bits per face
-  std::vector<float> sx_[5], sy_[5]; // pixel x, y on each hemicube face
+  // Pixel x, y on each hemicube face, side by side: a leaf's corner is
+  // gathered by one load.
+  std::vector<std::array<float, 2>> sxy_[5];
   std::vector<int> stack_;
   // Form factors summed per element, sparse: a block of kSumBlock sums for
   // each kSumBlock elements a column reaches, not 8 bytes for every

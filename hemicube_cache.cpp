@@ -179,12 +179,17 @@ void Hemicube::BuildCache(const Mesh& mesh) {
   for (auto* a : {&lx_, &ly_, &lz_}) a->resize(most);
   code_.resize(most);
   for (int h = 0; h < 5; ++h) {
-    sx_[h].resize(most);
-    sy_[h].resize(most);
+    sxy_[h].resize(most);
   }
   acc_.clear();
   block_.assign((mesh.elems.size() + kSumBlock - 1) / kSumBlock, -1);
   touched_.assign((mesh.elems.size() + 63) / 64, 0);
+  // HugePageAllocator's arrays are advised before their first touch, but
+  // the heap hands out memory the mesh's build already touched in small
+  // pages, which the advice leaves so: collapsed now, once filled.
+  auto huge = [](const auto& a) { PreferHugePages(a.data(), a.size() * sizeof(a[0])); };
+  huge(faces_), huge(boxes_), huge(elem_), huge(outline_), huge(outline_wide_);
+  huge(outline_n_), huge(nodes_), huge(block_);
 }
 
 // Median split along the box's longest axis, down to a few faces a node:
