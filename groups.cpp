@@ -4,6 +4,9 @@
 #include <array>
 #include <cfloat>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <unordered_map>
 
 #include "check.h"
@@ -744,7 +747,17 @@ float FloatDown(double x) {
   // Out of float's range: the largest float, or -inf (a plain cast is
   // undefined there).
   const float f = x > double(FLT_MAX) ? FLT_MAX : x < -double(FLT_MAX) ? -HUGE_VALF : float(x);
-  return double(f) > x ? std::nextafter(f, -HUGE_VALF) : f;
+  if (!(double(f) > x)) return f;
+  // The float below f (finite, as f > x), std::nextafter(f, -HUGE_VALF)
+  // without its call into libm, which was a tenth of the tree's making:
+  // one step of f's bits away from zero below it, toward it above.
+  if (f == 0) return -std::numeric_limits<float>::denorm_min();
+  uint32_t u;
+  std::memcpy(&u, &f, sizeof u);
+  u = f > 0 ? u - 1 : u + 1;
+  float below;
+  std::memcpy(&below, &u, sizeof below);
+  return below;
 }
 
 float FloatUp(double x) { return -FloatDown(-x); }
