@@ -4,6 +4,9 @@
 #include <array>
 #include <cfloat>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <unordered_map>
 
 #include "check.h"
@@ -122,15 +125,19 @@ class Grouper {
         if (int(group.size()) == kMaxGroup || ++looked > kLookAhead) break;
         const glm::dvec3 l = glm::min(lo, it->lo), h = glm::max(hi, it->hi);
         const double width = glm::length(h - l);
-        // The rule's tests (the answer is their conjunction), cheapest
-        // first: no wider than the nearest receiver of any member allows
-        // (mostly known, or settled by a receiver found nearby; the members'
-        // first, as they are asked again and again), then the planes, then
-        // the segments.
+        // The rule's tests (the answer is their conjunction, and none
+        // depends on what the others found: Fits' bounds only save it
+        // searches), cheapest first: no wider than what is known of each
+        // member's nearest receiver allows, the normals, then the
+        // searches that finish that (most pairs of a room of boxes face
+        // different ways: no search for them), then the planes, then the
+        // segments.
         auto all = [&](auto test) {
           return std::all_of(group.begin(), group.end(), test);
         };
-        if (!all([&](int g) { return Fits(g, width); }) || !Fits(q, width) ||
+        if (!all([&](int g) { return MayFit(g, width); }) || !MayFit(q, width) ||
+            !all([&](int g) { return Parallel(g, q); }) ||
+            !all([&](int g) { return Fits(g, width); }) || !Fits(q, width) ||
             !all([&](int g) { return Alike(g, q); }) ||
             !all([&](int g) { return Clear(g, q); }))
           continue;
@@ -222,13 +229,18 @@ class Grouper {
   // finds d(p) (a group grows, and asks again); what was found is kept.
   bool Fits(int p, double width) {
     PatchInfo& in = info_[size_t(p)];
-    if (width > G_ || kGroupReach * in.far < width) return false;
+    if (!MayFit(p, width)) return false;
     if (width <= kGroupReach * in.near) return true;
     const double within = in.near > 0 ? G_ / kGroupReach : width / kGroupReach;
     const double d = Nearest(p, within, width);
     if (d < within) in.far = d;                      // an element it lights, that far
     if (kGroupReach * d >= width) in.near = d;       // none nearer (the search ran out)
     return kGroupReach * d >= width;
+  }
+
+  // Fits(p, width) unless what is known of d(p) already says no.
+  bool MayFit(int p, double width) const {
+    return width <= G_ && kGroupReach * info_[size_t(p)].far >= width;
   }
 
   // A bounding-volume tree of the elements' boxes: the elements in the
@@ -433,32 +445,31 @@ class Grouper {
       return best;
     }
     // Any element nearer than `within` ends the search: depth first, the
-    // nearer child first (of two as near, the one that holds the leaf of
-    // p's first element), the first one found.
+    // nearer child first, the first one found. With the home leaf scanned,
+    // the rest of the tree is the siblings of the boxes that hold it: they
+    // are looked into from the home leaf up, the nearest in the tree's
+    // order first (its receiver is mostly beside it), and the path from
+    // the root down to p, which every search passed, is not walked.
     if (!full) {
       stack_.clear();
-      Visit root{0, int(levels_.size()) - 1, 0};
-      if (Worth(s, best, &root)) stack_.push_back(root);
-      while (!stack_.empty() && found < 0) {
-        const Visit v = stack_.back();
-        stack_.pop_back();
-        if (v.level == 0) {
-          ScanLeaf(s, v.i, &best, &found);
-          continue;
+      if (home < 0) {
+        Visit root{0, int(levels_.size()) - 1, 0};
+        if (Worth(s, best, &root)) stack_.push_back(root);
+        Descend(s, &best, &found);
+      }
+      for (int level = 0; home >= 0 && level + 1 < int(levels_.size()) && found < 0; ++level) {
+        Visit sibling{0, level, (home >> level) ^ 1};
+        if (size_t(sibling.i) < levels_[size_t(level)].size() && Worth(s, best, &sibling)) {
+          stack_.push_back(sibling);
+          Descend(s, &best, &found);
         }
-        const size_t below = levels_[size_t(v.level) - 1].size();
-        Visit a{0, v.level - 1, 2 * v.i}, b{0, v.level - 1, 2 * v.i + 1};
-        const bool has_a = Worth(s, best, &a), has_b = size_t(b.i) < below && Worth(s, best, &b);
-        if (has_a && has_b && (a.d < b.d || (a.d == b.d && home >> a.level == a.i)))
-          std::swap(a, b);
-        if (has_a) stack_.push_back(a);
-        if (has_b) stack_.push_back(b);
       }
       remember();
       return best;
     }
     // Best first: the box nearest p's centre next, so that the search
-    // ends at the first box no nearer than the best element so far.
+    // ends at the first box no nearer than the best element so far; from
+    // the siblings of the boxes that hold the home leaf, as above.
     heap_.clear();
     auto push = [&](int level, int i) {
       Visit v{0, level, i};
@@ -466,7 +477,10 @@ class Grouper {
       heap_.push_back(v);
       std::push_heap(heap_.begin(), heap_.end(), Farther);
     };
-    push(int(levels_.size()) - 1, 0);
+    if (home < 0) push(int(levels_.size()) - 1, 0);
+    for (int level = 0; home >= 0 && level + 1 < int(levels_.size()); ++level)
+      if (size_t((home >> level) ^ 1) < levels_[size_t(level)].size())
+        push(level, (home >> level) ^ 1);
     while (!heap_.empty() && heap_.front().d < best) {
       std::pop_heap(heap_.begin(), heap_.end(), Farther);
       const Visit v = heap_.back();
@@ -482,6 +496,25 @@ class Grouper {
     }
     remember();
     return best;
+  }
+
+  // Nearest's depth-first search of the boxes on stack_ and below them,
+  // until an element nearer than *best is found (*found).
+  void Descend(const Query& s, double* best, int* found) {
+    while (!stack_.empty() && *found < 0) {
+      const Visit v = stack_.back();
+      stack_.pop_back();
+      if (v.level == 0) {
+        ScanLeaf(s, v.i, best, found);
+        continue;
+      }
+      const size_t below = levels_[size_t(v.level) - 1].size();
+      Visit a{0, v.level - 1, 2 * v.i}, b{0, v.level - 1, 2 * v.i + 1};
+      const bool has_a = Worth(s, *best, &a), has_b = size_t(b.i) < below && Worth(s, *best, &b);
+      if (has_a && has_b && a.d < b.d) std::swap(a, b);
+      if (has_a) stack_.push_back(a);
+      if (has_b) stack_.push_back(b);
+    }
   }
 
   // Is box v of the tree worth looking into for p's receivers nearer than
@@ -558,12 +591,16 @@ class Grouper {
                      [&](const glm::dvec3& v) { return glm::dot(f.normal, v) - f.offset > eps_; });
   }
 
-  // May a and b shoot as one, as far as their planes tell? The rule of
-  // groups.h but the segment between them (Clear).
+  // Are a's and b's normals within kGroupAngle?
+  bool Parallel(int a, int b) const {
+    return !(glm::dot(Plane(a).normal, Plane(b).normal) < std::cos(kGroupAngle * M_PI / 180));
+  }
+
+  // May a and b, Parallel, shoot as one, as far as their planes tell? The
+  // rule of groups.h but the normals and the segment between them (Clear).
   bool Alike(int a, int b) const {
     const MeshFace& A = Plane(a);
     const MeshFace& B = Plane(b);
-    if (glm::dot(A.normal, B.normal) < std::cos(kGroupAngle * M_PI / 180)) return false;
     // Some corner of patch p behind f's plane by more than tau_.
     auto behind = [&](const MeshFace& f, int p) {
       return AnyCorner(
@@ -710,7 +747,17 @@ float FloatDown(double x) {
   // Out of float's range: the largest float, or -inf (a plain cast is
   // undefined there).
   const float f = x > double(FLT_MAX) ? FLT_MAX : x < -double(FLT_MAX) ? -HUGE_VALF : float(x);
-  return double(f) > x ? std::nextafter(f, -HUGE_VALF) : f;
+  if (!(double(f) > x)) return f;
+  // The float below f (finite, as f > x), std::nextafter(f, -HUGE_VALF)
+  // without its call into libm, which was a tenth of the tree's making:
+  // one step of f's bits away from zero below it, toward it above.
+  if (f == 0) return -std::numeric_limits<float>::denorm_min();
+  uint32_t u;
+  std::memcpy(&u, &f, sizeof u);
+  u = f > 0 ? u - 1 : u + 1;
+  float below;
+  std::memcpy(&below, &u, sizeof below);
+  return below;
 }
 
 float FloatUp(double x) { return -FloatDown(-x); }

@@ -183,6 +183,74 @@ TEST(Groups, TilesOfATiltedValleyGroupOnlyAsFarAsTheOtherSide) {
   EXPECT_GE(members, 24u);
 }
 
+// Every group keeps the rule against its members' nearest receivers found
+// by brute force (every element, groups.h's test of lighting) wherever
+// they lie in the search's tree: a fine tiled floor under small panels
+// facing down, scattered at heights and places that no order of the tree
+// keeps beside the tiles under them. A search that passed a receiver (its
+// box in the tree far from the tile's own leaf) grew a group too wide.
+TEST(Groups, GroupsStayWithinTheirNearestReceiversFoundByBruteForce) {
+  Scene s = TiledBox(40);
+  for (int k = 0; k < 23; ++k) {
+    const double x = 0.05 + 0.85 * double((37 * k) % 23) / 23, z = 0.05 + 0.85 * double((11 * k + 5) % 23) / 23;
+    const double y = 0.08 + 0.6 * double((13 * k) % 7) / 7, w = 0.04;
+    AddFace(&s, {{x, y, z}, {x + w, y, z}, {x + w, y, z + w}, {x, y, z + w}}, glm::dvec3(0.5),
+            glm::dvec3(0));
+  }
+  for (size_t f = 0; f < s.faces.size(); ++f) s.faces[f].index = int(f);
+  const Mesh m = MakeMesh(s, Half());
+  const double eps = 1e-9 * std::max(m.scene_diagonal, m.patch_size);
+  auto plane = [&](int p) -> const MeshFace& { return m.faces[size_t(m.patches[size_t(p)].face)]; };
+  auto corners = [&](int e, auto f) {
+    const Element& el = m.elems[size_t(e)];
+    bool any = false;
+    for (int k = 0; k < (el.IsTriangle() ? 3 : 4); ++k) any = any || f(m.verts[size_t(el.v[k])]);
+    return any;
+  };
+  auto nearest = [&](int q) {
+    const MeshFace& fq = plane(q);
+    double d = 1e9;
+    for (size_t e = 0; e < m.elems.size(); ++e) {
+      const int p = m.elems[e].patch;
+      if (p == q) continue;
+      const MeshFace& fe = plane(p);
+      if (!corners(int(e), [&](const glm::dvec3& v) { return glm::dot(fq.normal, v) - fq.offset > eps; }))
+        continue;
+      bool faces = false;
+      for (int t : m.Tops(q))
+        faces = faces || corners(t, [&](const glm::dvec3& v) {
+                  return glm::dot(fe.normal, v) - fe.offset > eps;
+                });
+      if (!faces) continue;
+      glm::dvec3 lo(1e9), hi(-1e9);
+      corners(int(e), [&](const glm::dvec3& v) {
+        lo = glm::min(lo, v);
+        hi = glm::max(hi, v);
+        return false;
+      });
+      const glm::dvec3 c = m.patch_center[size_t(q)];
+      d = std::min(d, glm::length(glm::max(glm::max(lo - c, c - hi), 0.0)));
+    }
+    return d;
+  };
+  size_t members = 0;
+  for (const PatchGroup& g : m.groups) {
+    members += g.members.size();
+    glm::dvec3 lo(1e9), hi(-1e9);
+    for (int q : g.members)
+      for (int t : m.Tops(q))
+        corners(t, [&](const glm::dvec3& v) {
+          lo = glm::min(lo, v);
+          hi = glm::max(hi, v);
+          return false;
+        });
+    for (int q : g.members) EXPECT_LE(glm::length(hi - lo), kGroupReach * nearest(q));
+  }
+  // Some tiles are far enough from the panels and the walls to group.
+  EXPECT_GE(m.groups.size(), 4u);
+  EXPECT_GE(members, 8u);
+}
+
 // The element boxes in float hold the boxes in double: each bound rounded
 // outward, beyond float's range and in it, at and between floats.
 TEST(Groups, FloatBoundsRoundOutward) {
