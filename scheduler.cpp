@@ -424,6 +424,7 @@ void Scheduler::Subdivide() {
 // mesh. Columns in flight are still shot: they are columns of the same
 // geometry.
 void Scheduler::NextWave() {
+  solver_->EndWave();
   if (opts_.wave_end) opts_.wave_end(wave_);
   solver_->NewWave();
   sub_->StartWave(mesh_);

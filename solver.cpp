@@ -101,6 +101,11 @@ void Solver::PatchArrays() {
   group_dirty_.assign(mesh_.groups.size(), 0);
 }
 
+void Solver::EndWave() {
+  FreeStorage(&noise_);
+  FreeStorage(&direct_);
+}
+
 void Solver::NewWave() {
   Grow();
   for (size_t e = 0; e < elem_.size(); ++e) elem_[e].b = mesh_.Emission(mesh_.FaceOf(int(e)));

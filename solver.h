@@ -124,6 +124,12 @@ class Solver {
   // A new wave (paper §4.4): all computed radiosity is thrown away and the
   // solution starts again from the emitters, on the mesh as it is now.
   void NewWave();
+  // The end of a wave, before its picture: the per-element tracks that
+  // NewWave() starts again from 0 (the noise and the direct light, 12
+  // bytes an element) freed now, so that they do not stand beside the
+  // picture (the master's peak in a run that divides). Until NewWave(),
+  // noise() and direct() are empty.
+  void EndWave();
 
   // Σ|unshot|·area / Σ emitted·area, channels summed; 0 for a dark scene.
   double UnshotFraction() const;

@@ -214,6 +214,53 @@ TEST(Solver, TrackingDoesNotChangeWhatShootGives) {
     for (int k = 0; k < 3; ++k) ASSERT_EQ(a[e][k], b[e][k]) << "element " << e;
 }
 
+// EndWave (before a wave's picture) frees the noise and direct-light
+// tracks; NewWave then starts them again as it does without it: the same
+// tracks, choices and B to the bit through the next wave.
+TEST(Solver, EndWaveFreesTheTracksNewWaveStartsAgain) {
+  std::string dir = __FILE__;
+  dir = dir.substr(0, dir.find_last_of('/') + 1) + "../scenes/";
+  struct stat st;
+  if (stat(dir.c_str(), &st) != 0) dir = "scenes/";
+  Scene scene;
+  std::string err;
+  std::vector<std::string> warnings;
+  ASSERT_TRUE(LoadScene(dir + "room.obj", &scene, &err, &warnings)) << err;
+  Mesh m;
+  ASSERT_TRUE(BuildMesh(scene, MeshOptions(), &m, &err)) << err;
+  Hemicube h(32);
+  Solver kept(m, true), ended(m, true);
+  for (Solver* s : {&kept, &ended}) s->TrackNoise(32), s->TrackDirect();
+  std::vector<FormFactor> column;
+  auto shoot = [&](int shots) {
+    for (int shot = 0; shot < shots; ++shot) {
+      const int p = kept.Select();
+      ASSERT_EQ(p, ended.Select()) << "shot " << shot;
+      if (p < 0) break;
+      ShotColumn(&h, m, p, GroupOf(m, p), kept.TimesShot(p), true, 1, &column);
+      kept.Shoot(p, column);
+      ended.Shoot(p, column);
+    }
+  };
+  shoot(100);
+  ASSERT_FALSE(ended.noise().empty());
+  ended.EndWave();
+  EXPECT_TRUE(ended.noise().empty());
+  EXPECT_TRUE(ended.direct().empty());
+  kept.NewWave();
+  ended.NewWave();
+  EXPECT_EQ(kept.noise(), ended.noise());
+  EXPECT_EQ(kept.direct(), ended.direct());
+  EXPECT_EQ(ended.noise().size(), m.elems.size());
+  shoot(100);
+  EXPECT_EQ(kept.noise(), ended.noise());
+  EXPECT_EQ(kept.direct(), ended.direct());
+  const ElemB a = kept.radiosity(), b = ended.radiosity();
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t e = 0; e < a.size(); ++e)
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(a[e][k], b[e][k]) << "element " << e;
+}
+
 TEST(Solver, DarkSceneConvergesToBlack) {
   Scene s = Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(0.0)});
   Mesh m = MakeMesh(s);
