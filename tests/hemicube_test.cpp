@@ -181,16 +181,6 @@ TEST(Hemicube, ColumnIsSortedAndPositive) {
   }
 }
 
-Mesh Shipped(const std::string& name) {
-  Scene scene;
-  std::string err;
-  std::vector<std::string> warnings;
-  EXPECT_TRUE(LoadScene(ShippedScenePath(name), &scene, &err, &warnings)) << err;
-  Mesh mesh;
-  EXPECT_TRUE(BuildMesh(scene, MeshOptions(), &mesh, &err)) << err;
-  return mesh;
-}
-
 // Culling changes what is read, never the answer: bit for bit the column a
 // plain z-buffer over every front-facing face gives, on every shipped scene
 // from shooters all over it, turned and not, and after divisions (which the
@@ -199,7 +189,7 @@ Mesh Shipped(const std::string& name) {
 // are read.
 TEST(Hemicube, CullingGivesThePlainZBuffersColumns) {
   for (const char* name : {"cornell", "maze", "room", "blender"}) {
-    Mesh m = Shipped(name);
+    Mesh m = ShippedMesh(name);
     Hemicube culled(128), plain(128);
     plain.set_culling(false);
     for (int pass = 0; pass < 2; ++pass) {

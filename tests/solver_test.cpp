@@ -1,7 +1,5 @@
 #include "solver.h"
 
-#include <sys/stat.h>
-
 #include <cmath>
 #include <deque>
 #include <string>
@@ -135,17 +133,8 @@ TEST(Solver, FacesThatSeeNothingAreNotWorkedOn) {
 // scenes, with overshooting on and off: patches taken three at a time as
 // a worker's queue holds them, divisions, and a new wave halfway.
 TEST(Solver, SelectIsTheFullScanOnTheShippedScenes) {
-  std::string dir = __FILE__;
-  dir = dir.substr(0, dir.find_last_of('/') + 1) + "../scenes/";
-  struct stat st;
-  if (stat(dir.c_str(), &st) != 0) dir = "scenes/";
   for (const char* name : {"cornell", "room", "maze", "blender"}) {
-    Scene scene;
-    std::string err;
-    std::vector<std::string> warnings;
-    ASSERT_TRUE(LoadScene(dir + name + ".obj", &scene, &err, &warnings)) << err;
-    Mesh m;
-    ASSERT_TRUE(BuildMesh(scene, MeshOptions(), &m, &err)) << err;
+    const Mesh m = ShippedMesh(name);
     Hemicube h(32);
     for (bool over : {true, false}) {
       Solver solver(m, over);
@@ -181,16 +170,7 @@ TEST(Solver, SelectIsTheFullScanOnTheShippedScenes) {
 // only subdivision needs (noise, first light, the changed list): the same
 // choices and B to the bit either way, on a shipped scene.
 TEST(Solver, TrackingDoesNotChangeWhatShootGives) {
-  std::string dir = __FILE__;
-  dir = dir.substr(0, dir.find_last_of('/') + 1) + "../scenes/";
-  struct stat st;
-  if (stat(dir.c_str(), &st) != 0) dir = "scenes/";
-  Scene scene;
-  std::string err;
-  std::vector<std::string> warnings;
-  ASSERT_TRUE(LoadScene(dir + "room.obj", &scene, &err, &warnings)) << err;
-  Mesh m;
-  ASSERT_TRUE(BuildMesh(scene, MeshOptions(), &m, &err)) << err;
+  const Mesh m = ShippedMesh("room");
   Hemicube h(32);
   Solver plain(m, true), tracked(m, true);
   tracked.TrackNoise(32);
@@ -218,16 +198,7 @@ TEST(Solver, TrackingDoesNotChangeWhatShootGives) {
 // tracks; NewWave then starts them again as it does without it: the same
 // tracks, choices and B to the bit through the next wave.
 TEST(Solver, EndWaveFreesTheTracksNewWaveStartsAgain) {
-  std::string dir = __FILE__;
-  dir = dir.substr(0, dir.find_last_of('/') + 1) + "../scenes/";
-  struct stat st;
-  if (stat(dir.c_str(), &st) != 0) dir = "scenes/";
-  Scene scene;
-  std::string err;
-  std::vector<std::string> warnings;
-  ASSERT_TRUE(LoadScene(dir + "room.obj", &scene, &err, &warnings)) << err;
-  Mesh m;
-  ASSERT_TRUE(BuildMesh(scene, MeshOptions(), &m, &err)) << err;
+  const Mesh m = ShippedMesh("room");
   Hemicube h(32);
   Solver kept(m, true), ended(m, true);
   for (Solver* s : {&kept, &ended}) s->TrackNoise(32), s->TrackDirect();

@@ -4,6 +4,7 @@
 
 #include <sys/stat.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <vector>
@@ -86,6 +87,21 @@ inline std::string ShippedScenePath(const std::string& name) {
   struct stat st;
   if (stat(path.c_str(), &st) != 0) path = "scenes/" + name + ".obj";
   return path;
+}
+
+// A shipped scene meshed with the default options (aborts with the error
+// should it not load: the tests that use it test other things).
+inline Mesh ShippedMesh(const std::string& name) {
+  Scene scene;
+  std::string err;
+  std::vector<std::string> warnings;
+  Mesh mesh;
+  if (!LoadScene(ShippedScenePath(name), &scene, &err, &warnings) ||
+      !BuildMesh(scene, MeshOptions(), &mesh, &err)) {
+    std::fprintf(stderr, "%s: %s\n", name.c_str(), err.c_str());
+    std::abort();
+  }
+  return mesh;
 }
 
 #endif
