@@ -168,6 +168,9 @@ class Hemicube {
   static constexpr int kTile = 8;
   std::vector<float> tile_min_;
   std::vector<uint8_t> dirty_;
+  // Where hemicube face h begins in depth_ and item_, and in tile_min_
+  // and dirty_: once, not per polygon Scan draws and per box Open tests.
+  size_t pixel_at_[5] = {}, tile_at_[5] = {};
   // Per hemicube face, the rows [first, last) Scan wrote since the last
   // readback, which reads and clears only those.
   int rows_[5][2] = {{INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}};
