@@ -367,9 +367,13 @@ float AutoExposure(const ShadedMesh& mesh) {
     }
   };
   // Bins of luminance by the top 16 bits of the double (sign, exponent, 4
-  // bits of mantissa: in the order of the values, as they are >= 0).
-  constexpr uint16_t kNoBin = 0xffff;  // no weight: left out
-  std::vector<uint16_t> bin_of(nv, kNoBin);
+  // bits of mantissa: in the order of the values, as they are >= 0), of
+  // the vertices of some weight (the walks' vertices).
+  auto bin_of = [](double lum) {
+    uint64_t bits;
+    std::memcpy(&bits, &lum, sizeof bits);
+    return size_t(bits >> 48);
+  };
   std::vector<uint32_t> count(size_t(1) << 15, 0);
   double total = 0, brightest = 0;
   size_t weighted = 0;
@@ -377,10 +381,7 @@ float AutoExposure(const ShadedMesh& mesh) {
     const double lum = lum_of(i);
     total += weight;
     brightest = std::max(brightest, lum);
-    uint64_t bits;
-    std::memcpy(&bits, &lum, sizeof bits);
-    bin_of[i] = uint16_t(bits >> 48);
-    ++count[bin_of[i]];
+    ++count[bin_of(lum)];
     ++weighted;
   });
   // The weights summed in increasing (luminance, weight) up to the
@@ -411,15 +412,18 @@ float AutoExposure(const ShadedMesh& mesh) {
   };
   for (size_t r = 0, lo = 0; r < runs.size() && !reached; lo = runs[r++].end) {
     const size_t hi = runs[r].end;
-    auto in_run = [&](size_t i) { return bin_of[i] != kNoBin && bin_of[i] >= lo && bin_of[i] < hi; };
+    auto in_run = [&](size_t i) {
+      const size_t bin = bin_of(lum_of(i));
+      return bin >= lo && bin < hi;
+    };
     // One bin of one luminance (the dark vertices' 0): its weights alone.
     double least = HUGE_VAL, most = 0;
     if (runs[r].vertices > run)
-      for (size_t i = 0; i < nv; ++i)
-        if (in_run(i)) {
-          least = std::min(least, lum_of(i));
-          most = std::max(most, lum_of(i));
-        }
+      walk([&](size_t i, double) {
+        if (!in_run(i)) return;
+        least = std::min(least, lum_of(i));
+        most = std::max(most, lum_of(i));
+      });
     lw.clear();
     ws.clear();
     if (least == most) {
