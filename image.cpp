@@ -337,61 +337,72 @@ float AutoExposure(const ShadedMesh& mesh) {
     const double lum = 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
     return std::isfinite(lum) && lum > 0 ? lum : 0.0;
   };
-  // A vertex's weight: its share of the polygons round it, and its
-  // luminance's bin: 10 bytes a vertex, the luminance computed again where
-  // it is needed (the (luminance, weight) pairs of every vertex took 16,
-  // the master's largest array at a wave's end).
-  std::vector<double> w(mesh.positions().size(), 0.0);
-  for (const auto& q : mesh.polys) {
-    const double a = PolyArea(mesh, q);
-    if (!std::isfinite(a)) continue;
-    for (int k = 0; k < PolySize(q); ++k) w[q[k]] += a / PolySize(q);
-  }
+  // A vertex's weight: its share of the polygons round it, summed in the
+  // polygons' order. Not kept for every vertex (8 bytes each, 24 MB at 10^6
+  // elements, the master's peak at a dividing run's first picture): made
+  // again for a quarter of the vertices at a time whenever a walk needs
+  // them, each vertex's sum the same additions in the same order, so the
+  // same double. A polygon with no corner in the quarter is passed over
+  // before its area is computed.
+  const size_t nv = mesh.positions().size();
+  const size_t chunk = std::max<size_t>((nv + 3) / 4, 1);
+  std::vector<double> w;
+  w.reserve(std::min(chunk, nv));
+  // fn(i, weight) for each vertex i of some weight, in the order of i.
+  auto walk = [&](auto&& fn) {
+    for (size_t lo = 0; lo < nv; lo += chunk) {
+      const size_t hi = std::min(nv, lo + chunk);
+      w.assign(hi - lo, 0.0);
+      for (const auto& q : mesh.polys) {
+        bool touches = false;
+        for (int k = 0; k < PolySize(q); ++k) touches |= size_t(q[k]) - lo < hi - lo;
+        if (!touches) continue;
+        const double a = PolyArea(mesh, q);
+        if (!std::isfinite(a)) continue;
+        for (int k = 0; k < PolySize(q); ++k)
+          if (size_t(q[k]) - lo < hi - lo) w[q[k] - lo] += a / PolySize(q);
+      }
+      for (size_t i = lo; i < hi; ++i)
+        if (w[i - lo] > 0) fn(i, w[i - lo]);
+    }
+  };
   // Bins of luminance by the top 16 bits of the double (sign, exponent, 4
-  // bits of mantissa: in the order of the values, as they are >= 0).
-  constexpr uint16_t kNoBin = 0xffff;  // no weight: left out
-  std::vector<uint16_t> bin_of(w.size(), kNoBin);
+  // bits of mantissa: in the order of the values, as they are >= 0), of
+  // the vertices of some weight (the walks' vertices).
+  auto bin_of = [](double lum) {
+    uint64_t bits;
+    std::memcpy(&bits, &lum, sizeof bits);
+    return size_t(bits >> 48);
+  };
   std::vector<uint32_t> count(size_t(1) << 15, 0);
   double total = 0, brightest = 0;
   size_t weighted = 0;
-  for (size_t i = 0; i < w.size(); ++i) {
-    if (!(w[i] > 0)) continue;
+  walk([&](size_t i, double weight) {
     const double lum = lum_of(i);
-    total += w[i];
+    total += weight;
     brightest = std::max(brightest, lum);
-    uint64_t bits;
-    std::memcpy(&bits, &lum, sizeof bits);
-    bin_of[i] = uint16_t(bits >> 48);
-    ++count[bin_of[i]];
+    ++count[bin_of(lum)];
     ++weighted;
-  }
+  });
   // The weights summed in increasing (luminance, weight) up to the
   // percentile, a run of bins at a time (about 1/16 of the vertices each,
   // or one bin), sorted: the same sums in the same order as a sort of all
   // of them, for a run's (luminance, weight) pairs, 16 bytes each, or,
-  // for one bin larger than that (those still dark early in a run, all of
-  // luminance 0), its vertices' indices, 4.
+  // for one bin larger than that of one luminance (those still dark early
+  // in a run, all of luminance 0), its weights, 8.
   const size_t run = std::max<size_t>(weighted / 16, 1);
   struct Run {
     size_t end, vertices;  // its last bin + 1, its vertices
   };
   std::vector<Run> runs;
-  size_t largest = 0;
   for (size_t hi = 0; hi < count.size();) {
     size_t m = 0;
     while (hi < count.size() && (m == 0 || m + count[hi] <= run)) m += count[hi++];
     if (m == 0) break;  // empty bins to the end
     runs.push_back({hi, m});
-    if (m > run) largest = std::max(largest, m);
   }
   std::vector<std::pair<double, double>> lw;
-  lw.reserve(run);
-  std::vector<uint32_t> in;
-  in.reserve(largest);
-  auto before = [&](uint32_t a, uint32_t b) {
-    const std::pair<double, double> pa(lum_of(a), w[a]), pb(lum_of(b), w[b]);
-    return pa < pb;
-  };
+  std::vector<double> ws;
   double level = 0, sum = 0;
   bool reached = false;
   auto add = [&](double lum, double weight) {
@@ -401,30 +412,37 @@ float AutoExposure(const ShadedMesh& mesh) {
   };
   for (size_t r = 0, lo = 0; r < runs.size() && !reached; lo = runs[r++].end) {
     const size_t hi = runs[r].end;
-    const bool big = runs[r].vertices > run;  // one bin
-    lw.clear();
-    in.clear();
+    auto in_run = [&](size_t i) {
+      const size_t bin = bin_of(lum_of(i));
+      return bin >= lo && bin < hi;
+    };
+    // One bin of one luminance (the dark vertices' 0): its weights alone.
     double least = HUGE_VAL, most = 0;
-    for (size_t i = 0; i < w.size(); ++i) {
-      if (bin_of[i] == kNoBin || bin_of[i] < lo || bin_of[i] >= hi) continue;
-      if (!big) {
-        lw.emplace_back(lum_of(i), w[i]);
-        continue;
-      }
-      in.push_back(uint32_t(i));
-      least = std::min(least, lum_of(i));
-      most = std::max(most, lum_of(i));
+    if (runs[r].vertices > run)
+      walk([&](size_t i, double) {
+        if (!in_run(i)) return;
+        least = std::min(least, lum_of(i));
+        most = std::max(most, lum_of(i));
+      });
+    lw.clear();
+    ws.clear();
+    if (least == most) {
+      ws.reserve(runs[r].vertices);
+      walk([&](size_t i, double weight) {
+        if (in_run(i)) ws.push_back(weight);
+      });
+      std::sort(ws.begin(), ws.end());
+      for (double weight : ws)
+        if (add(least, weight)) break;
+    } else {
+      lw.reserve(runs[r].vertices);
+      walk([&](size_t i, double weight) {
+        if (in_run(i)) lw.emplace_back(lum_of(i), weight);
+      });
+      std::sort(lw.begin(), lw.end());
+      for (const auto& [lum, weight] : lw)
+        if (add(lum, weight)) break;
     }
-    std::sort(lw.begin(), lw.end());
-    for (const auto& [lum, weight] : lw)
-      if (add(lum, weight)) break;
-    // One luminance (the dark vertices' 0): the weights' order.
-    if (least == most)
-      std::sort(in.begin(), in.end(), [&](uint32_t a, uint32_t b) { return w[a] < w[b]; });
-    else
-      std::sort(in.begin(), in.end(), before);
-    for (uint32_t i : in)
-      if (add(lum_of(i), w[i])) break;
   }
   if (!(level > 0)) level = brightest;
   if (!(level > 0)) return 1.0f;

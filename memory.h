@@ -16,16 +16,18 @@
 // or the scene frame (with workers), the pictures at the end of a wave.
 // Measured at 1.06 M elements with shooter groups (the default): 263 to
 // 264 with -j 0 and 249 to 250 with -j 1 over 2 shots (336 and 336 at
-// 7afbefc, when the group search at start-up was the peak), but 401 and
-// 406 in a first wave that divided and split 263,927 patches into
+// 7afbefc, when the group search at start-up was the peak), but 397 and
+// 395 in a first wave that divided and split 263,927 patches into
 // 537,470: its picture (Shade's polygons and colours, AutoExposure's
-// weights) beside the adjacency and the solver grown for the children
-// and the pieces (412 and 418 at 597cf95, with the noise and direct
-// tracks kept through the picture: Solver::EndWave). The rate is the
-// highest, 406, with about 13% room, since subdivision's limit (app.cpp)
-// takes it as the cost of every element (490 at 597cf95, from 429; 520
-// at 7afbefc, from that pass's 462 at 0cd4817).
-constexpr double kMasterBytesPerElement = 460;
+// walks) beside the adjacency and the solver grown for the children and
+// the pieces (401 and 406 at d8ab6ac, when AutoExposure kept a weight
+// and a bin per vertex; 412 and 418 at 597cf95, with the noise and
+// direct tracks kept through the picture: Solver::EndWave). The rate is
+// the highest, 397, with about 13% room, since subdivision's limit
+// (app.cpp) takes it as the cost of every element (460 at d8ab6ac; 490
+// at 597cf95, from 429; 520 at 7afbefc, from that pass's 462 at
+// 0cd4817).
+constexpr double kMasterBytesPerElement = 450;
 // A worker: the mesh, its adjacency once divisions come, the hemicube.
 // It forms no shooter groups (the master sends them with the work), so
 // groups or not it measured the same: 147 to 148 over 2 shots, at the
