@@ -2,14 +2,12 @@
 
 #include <algorithm>
 #include <array>
-#include <cfloat>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
-#include <limits>
 #include <unordered_map>
 
 #include "check.h"
+#include "float_round.h"
 #include "memory.h"
 #include "radix_sort.h"
 
@@ -742,25 +740,6 @@ class Grouper {
 };
 
 }  // namespace
-
-float FloatDown(double x) {
-  // Out of float's range: the largest float, or -inf (a plain cast is
-  // undefined there).
-  const float f = x > double(FLT_MAX) ? FLT_MAX : x < -double(FLT_MAX) ? -HUGE_VALF : float(x);
-  if (!(double(f) > x)) return f;
-  // The float below f (finite, as f > x), std::nextafter(f, -HUGE_VALF)
-  // without its call into libm, which was a tenth of the tree's making:
-  // one step of f's bits away from zero below it, toward it above.
-  if (f == 0) return -std::numeric_limits<float>::denorm_min();
-  uint32_t u;
-  std::memcpy(&u, &f, sizeof u);
-  u = f > 0 ? u - 1 : u + 1;
-  float below;
-  std::memcpy(&below, &u, sizeof below);
-  return below;
-}
-
-float FloatUp(double x) { return -FloatDown(-x); }
 
 void FormGroups(const MeshOptions& opts, Mesh* mesh) {
   mesh->groups.clear();

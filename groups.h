@@ -62,13 +62,6 @@ constexpr int kLookAhead = 512;       // candidates looked at past a group's fir
 // so the groups hold for the whole run.
 void FormGroups(const MeshOptions& opts, Mesh* mesh);
 
-// x rounded to a float at or below it (FloatDown) or at or above it
-// (FloatUp), beyond float's range too: the group search's element boxes
-// in float hold the boxes in double, so that no element is nearer than
-// its float box says (groups.cpp).
-float FloatDown(double x);
-float FloatUp(double x);
-
 // The group patch p shoots for, or null when p shoots alone. Only a
 // group's first member is a shooter (Solver::Select, the hemicube); the
 // others are never selected.

@@ -9,6 +9,7 @@
 #include <functional>
 
 #include "check.h"
+#include "float_round.h"
 #include "groups.h"
 #include "hemicube.h"
 #include "memory.h"
@@ -89,10 +90,8 @@ void Hemicube::BuildCache(const Mesh& mesh) {
     for (int i : mesh.DivideVerts(mf)) grow(i);
     FaceBox box;
     for (int a = 0; a < 3; ++a) {
-      box.lo[a] = float(lo[a]);
-      if (double(box.lo[a]) > lo[a]) box.lo[a] = std::nextafter(box.lo[a], -INFINITY);
-      box.hi[a] = float(hi[a]);
-      if (double(box.hi[a]) < hi[a]) box.hi[a] = std::nextafter(box.hi[a], INFINITY);
+      box.lo[a] = FloatDown(lo[a]);
+      box.hi[a] = FloatUp(hi[a]);
     }
     byface.push_back(cf);
     bybox.push_back(box);

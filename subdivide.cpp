@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "check.h"
+#include "float_round.h"
 
 namespace {
 
@@ -24,12 +25,6 @@ constexpr double kDrift = 1.0 / 16;
 // lit scene's mean counts (a leaf that does not emit; its area is read
 // from the mesh, not kept: 8 bytes an element).
 constexpr uint8_t kLeaf = 1, kEligible = 2, kLit = 4;
-
-// x rounded up to a float.
-float Up(double x) {
-  float f = float(x);
-  return double(f) < x ? std::nextafter(f, HUGE_VALF) : f;
-}
 
 double ShortestEdge(const Mesh& m, const Element& e) {
   const int n = e.IsTriangle() ? 3 : 4;
@@ -214,7 +209,7 @@ std::vector<int32_t> Subdivider::Pass(const Mesh& mesh, const ElemB& b,
   for (int32_t e : todo) {
     double bound;
     const double factor = Factor(mesh, b, noise, ambient, mean, e, &bound);
-    bound_[size_t(e)] = Up(bound);
+    bound_[size_t(e)] = FloatUp(bound);
     at_pass_[size_t(e)] = pass;
     if (factor > threshold_) out.push_back(e);
     else mark_[size_t(e)] = 0;  // marks left: the chosen, for grading
