@@ -83,6 +83,14 @@ class ShooterQueue {
   // Shooters whose exact power Best() computed since the last Build.
   long Visited() const { return visited_; }
 
+  // The addresses Set(i) reads or writes beyond the inner nodes (which
+  // stay in the caches), appended to *out: what a shot waits on per
+  // shooter it reaches (Solver::ShotLines).
+  void Touches(int i, std::vector<const void*>* out) const {
+    out->push_back(&taken_[size_t(i)]);
+    out->push_back(&tree_[size_t(i)]);
+  }
+
  private:
   static constexpr size_t kFanout = 64;
   static double Clean(double b) { return b == b ? b : -HUGE_VAL; }  // NaN: out

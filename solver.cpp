@@ -708,3 +708,22 @@ double Solver::PowerRatio() const {
   }
   return s / emitted_;
 }
+
+void Solver::ShotLines(const std::vector<FormFactor>& column, std::vector<const char*>* out) const {
+  std::vector<const void*> at;
+  for (const FormFactor& ff : column) {
+    const size_t e = size_t(ff.elem);
+    at.push_back(&elem_[e]);
+    at.push_back(&patch_of_[e]);
+    // From the mesh, so that listing them reads none of the lines (a
+    // divided element counts its patch only, not its leaves').
+    const int32_t q = mesh_.elems[e].patch;
+    at.push_back(&patch_[size_t(q)]);
+    queue_.Touches(q, &at);
+  }
+  out->clear();
+  for (const void* a : at)
+    out->push_back(reinterpret_cast<const char*>(reinterpret_cast<uintptr_t>(a) & ~uintptr_t(63)));
+  std::sort(out->begin(), out->end());
+  out->erase(std::unique(out->begin(), out->end()), out->end());
+}

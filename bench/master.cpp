@@ -10,7 +10,9 @@
 // column). --divide: a division pass every 10 shots after the first 20
 // (without waves), timed per pass, with the share of the leaves it
 // evaluated; --every-leaf: every leaf every pass, as before issue 14.
-// --rounds N: N replays instead of 3, the quickest kept; --thread-cpu:
+// Then the memory floor (not with --divide): each shot's cache lines
+// read alone, per shot and per line. --rounds N: N replays instead of 3,
+// the quickest kept; --thread-cpu:
 // each part timed on the thread's CPU clock (a system call, about half a
 // microsecond a read, four a shot) rather than the wall clock scaled to
 // the round's CPU time: steadier on a machine shared with other work.
@@ -153,6 +155,46 @@ int main(int argc, char** argv) {
       shoot_s = sho;
     }
   }
+  // The memory floor: a round more in which each shot's cache lines
+  // (Solver::ShotLines: its elements' and patches' records and queue
+  // leaves; listed for every shot first, so that listing them does not
+  // stir the caches between shots) are read, in address order and
+  // fetched 32 ahead as Shoot fetches them, and timed alone; then the
+  // shot, not timed. At 10^5 elements and more the lines are scattered
+  // over arrays larger than the caches: the time the memory takes to
+  // deliver them, which no arrangement of the work on them goes below.
+  double floor_s = HUGE_VAL;
+  long lines = 0;
+  for (int round = 0; round < (divide ? 0 : rounds); ++round) {
+    Solver solver(mesh, overshoot);  // without divisions its layout stays as it is now
+    proto::Column got;
+    std::vector<std::vector<const char*>> at(frames.size());
+    lines = 0;
+    for (size_t i = 0; i < frames.size(); ++i) {
+      if (!proto::DecodeColumn(std::string_view(frames[i]).substr(proto::kHeaderSize), &got, &err))
+        return 1;  // decoded once already, above
+      solver.ShotLines(got.ff, &at[i]);
+      lines += long(at[i].size());
+    }
+    unsigned sum = 0;
+    double read_s = 0;
+    const double cpu0 = ThreadCpuSeconds(), wall0 = MonotonicSeconds();
+    for (size_t k = 0; k < frames.size(); ++k) {
+      const int p = solver.Select();
+      const std::vector<const char*>& a = at[k];
+      const double t0 = clock();
+      for (size_t i = 0; i < a.size(); ++i) {
+        if (i + 32 < a.size()) __builtin_prefetch(a[i + 32]);
+        sum += *reinterpret_cast<const volatile unsigned char*>(a[i]);
+      }
+      read_s += clock() - t0;
+      proto::DecodeColumn(std::string_view(frames[k]).substr(proto::kHeaderSize), &got, &err);
+      solver.Shoot(p, got.ff);
+    }
+    if (!thread_cpu) read_s *= (ThreadCpuSeconds() - cpu0) / (MonotonicSeconds() - wall0);
+    floor_s = std::min(floor_s, read_s);
+    if (sum == 1) std::fprintf(stderr, " ");  // the reads are used
+  }
   const double n = double(std::max(1L, done)), per = double(covered) / n;
   const double total = 1e6 * (select_s + decode_s + shoot_s) / n;
   std::string name = argv[1];
@@ -161,6 +203,11 @@ int main(int argc, char** argv) {
               name.c_str(), overshoot ? "on" : "off", patches, built, done, per,
               1e6 * select_s / n, 1e6 * decode_s / n, 1e6 * shoot_s / n, total,
               10 + 0.005 * per, 1e3 * (total - 10) / std::max(1.0, per));
+  if (!divide) {
+    const double shots_n = double(std::max<size_t>(1, frames.size()));
+    std::printf(" %.0f | %.2f | %.2f |", double(lines) / shots_n, 1e6 * floor_s / shots_n,
+                1e9 * floor_s / double(std::max(1L, lines)));
+  }
   if (divide)
     std::printf(" %ld | %ld | %.3f | %.2f | %.2f | %.2f |", passes, divided,
                 double(evaluated) / double(std::max(1L, leaves)),

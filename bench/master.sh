@@ -6,7 +6,8 @@
 #     run back to back (the machine may be shared: compare the ratios)
 #  2. the master's work per shot on recorded columns (build/radiosity-master:
 #     select, decode, shoot) against the target 10 us + 5 ns per covered
-#     element
+#     element, and the memory floor under shooting (the lines it touches,
+#     read alone)
 #  3. division pass time per size (10^3 to 10^6 elements: DIVIDE_SCENES,
 #     DIVIDE_SHOTS shots, default 300), evaluating the leaves that may
 #     divide against evaluating every leaf (radiosity-master --divide)
@@ -86,10 +87,12 @@ echo
 echo "The master's work per shot on recorded columns (build/radiosity-master, R 256: the"
 echo "columns computed first, then select, decode and shoot timed alone on the thread's"
 echo "CPU clock, the quickest of $ROUNDS replays): us per shot, and the target 10 us + 5 ns"
-echo "per covered element"
+echo "per covered element; then the memory floor: the cache lines a shot touches (its"
+echo "elements' and patches' records, element patch ids, the queue's leaves and flags),"
+echo "read alone in address order and timed per shot (us), and per line (ns)"
 echo
-echo "| scene | overshoot | patches | elements | shots | covered/shot | select | decode | shoot | master | target | ns per covered element beyond 10 us |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+echo "| scene | overshoot | patches | elements | shots | covered/shot | select | decode | shoot | master | target | ns per covered element beyond 10 us | lines/shot | floor | ns/line |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for sn in $SCENES; do
   scene=${sn%:*} n=${sn#*:}
   ./build/radiosity-master "$scene" "$n" 256 --rounds "$ROUNDS" --thread-cpu | sed "s|$S/||; s|scenes/||; s|\.obj||"

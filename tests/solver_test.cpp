@@ -1,7 +1,10 @@
 #include "solver.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <deque>
+#include <set>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -230,6 +233,41 @@ TEST(Solver, EndWaveFreesTheTracksNewWaveStartsAgain) {
   ASSERT_EQ(a.size(), b.size());
   for (size_t e = 0; e < a.size(); ++e)
     for (int k = 0; k < 3; ++k) ASSERT_EQ(a[e][k], b[e][k]) << "element " << e;
+}
+
+// ShotLines (bench/master.cpp's memory floor) lists each line Shoot
+// touches once, in address order: an element alone is five (its record,
+// its patch id, its patch's record, the queue's leaf and flag), and a
+// column's include every element's B and one record per patch reached.
+TEST(Solver, ShotLinesAreTheLinesShootTouches) {
+  const Mesh m = ShippedMesh("room");
+  Hemicube h(32);
+  Solver s(m, true);
+  std::vector<FormFactor> column;
+  const int p = s.Select();
+  ShotColumn(&h, m, p, GroupOf(m, p), 0, true, 1, &column);
+  ASSERT_GT(column.size(), 100u);
+  auto line = [](const void* a) {
+    return reinterpret_cast<const char*>(reinterpret_cast<uintptr_t>(a) & ~uintptr_t(63));
+  };
+  std::vector<const char*> lines;
+  s.ShotLines({column[0]}, &lines);
+  ASSERT_EQ(lines.size(), 5u);
+  EXPECT_TRUE(std::count(lines.begin(), lines.end(), line(&s.radiosity()[size_t(column[0].elem)])));
+  s.ShotLines(column, &lines);
+  std::set<int32_t> patches;
+  for (const FormFactor& ff : column) {
+    patches.insert(m.elems[size_t(ff.elem)].patch);
+    EXPECT_TRUE(std::binary_search(lines.begin(), lines.end(), line(&s.radiosity()[size_t(ff.elem)])));
+  }
+  EXPECT_GE(lines.size(), patches.size() + 2);  // and the arrays of ids, leaves and flags
+  EXPECT_LE(lines.size(), 5 * column.size());
+  for (size_t i = 0; i < lines.size(); ++i) {
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(lines[i]) % 64, 0u);
+    if (i > 0) {
+      EXPECT_LT(lines[i - 1], lines[i]);
+    }
+  }
 }
 
 TEST(Solver, DarkSceneConvergesToBlack) {
