@@ -61,6 +61,11 @@ $(B)/radiosity-master: $(B)/bench/master.o $(LIB_OBJS)
 $(B)/radiosity-cluster: $(B)/bench/cluster.o $(LIB_OBJS) $(SIM_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
+# Bytes per form factor of the column encoding against compressors
+# (liblz4, libzstd: only this benchmark links them).
+$(B)/radiosity-ffbytes: $(B)/bench/ffbytes.o $(LIB_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS) -llz4 -lzstd
+
 # The master's start-up (load, join, mesh, groups) in CPU seconds.
 $(B)/radiosity-startup: $(B)/bench/startup_cpu.o $(B)/clock.o $(B)/scene.o $(B)/surface.o $(B)/mesh.o $(B)/groups.o $(B)/files.o $(B)/memory.o
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
@@ -147,7 +152,8 @@ bench: deps
 # bench/results/report.md (half an hour or more, not yet timed with parts 5-8; run it on an idle machine).
 report: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
-	  $(B)/radiosity-waves $(B)/radiosity-column $(B)/radiosity-master $(B)/radiosity-cluster $(B)/radiosity-startup $(B)/scenegen
+	  $(B)/radiosity-waves $(B)/radiosity-column $(B)/radiosity-master $(B)/radiosity-cluster $(B)/radiosity-startup \
+	  $(B)/radiosity-ffbytes $(B)/scenegen
 	@sh bench/report
 
 install: radiosity

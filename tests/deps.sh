@@ -1,7 +1,7 @@
 #!/bin/sh
 # Installs the Debian packages radiosity needs to build and test, only when
 # one is missing. Run by `make check`, `make demo` and `make bench`.
-pkgs="g++ make pkg-config libglm-dev libstb-dev libtinyexr-dev libgtest-dev groff-base libssh-dev libssl-dev openssh-client openssh-server libcpp-httplib-dev"
+pkgs="g++ make pkg-config libglm-dev libstb-dev libtinyexr-dev libgtest-dev groff-base libssh-dev libssl-dev openssh-client openssh-server libcpp-httplib-dev liblz4-dev libzstd-dev"
 missing=""
 for p in $pkgs; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing="$missing $p"

@@ -1,0 +1,227 @@
+// radiosity-ffbytes: bytes on the wire per non-zero form factor, and what
+// they cost the worker to encode and the master to decode, for the
+// column encoding the program sends and for candidates that might send
+// fewer (issue 17, "Fewer bytes"), as Markdown table rows on stdout
+// (bench/ffbytes.sh adds the header):
+//   radiosity-ffbytes SCENE.obj SHOTS [R]
+// The columns are the run's own (Select, ShotColumn, Shoot: -j 0's order,
+// no subdivision), each encoded as the worker encodes it (EncodeColumn: a
+// frame). Candidates:
+//   now         the frame as sent (element ids as runs, 16-bit codes)
+//   + lz4       each frame compressed alone with LZ4 (liblz4), as a
+//               worker would send it
+//   + zstd -1   likewise with Zstandard level 1 (libzstd), and -3
+//   codes H0    the runs as now, the codes at their order-0 entropy over
+//               the run's columns (a bound for an entropy coder with one
+//               static table: no coder, no times)
+//   deltas H0   likewise for each code's difference from the one before it
+//               in the column (a bound for a coder of differences); and
+//               for codes with 9 and 8 fraction bits instead of 11 (what
+//               coarser codes would leave to send)
+// Times are the quickest of 3 passes over all columns, per form factor,
+// on the thread's CPU clock; decoding includes DecodeColumn after the
+// decompression, as the master would do both.
+#include <lz4.h>
+#include <zstd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "bench/load.h"
+#include "clock.h"
+#include "groups.h"
+#include "hemicube.h"
+#include "protocol.h"
+#include "solver.h"
+
+namespace {
+
+// The quickest of 3 runs of f(), in seconds of the thread's CPU time.
+template <class F>
+double Quickest(const F& f) {
+  double best = HUGE_VAL;
+  for (int round = 0; round < 3; ++round) {
+    const double t0 = ThreadCpuSeconds();
+    f();
+    best = std::min(best, ThreadCpuSeconds() - t0);
+  }
+  return best;
+}
+
+// Order-0 entropy, in bits per symbol, of the counts.
+double Entropy(const std::map<long, long>& counts) {
+  double total = 0, bits = 0;
+  for (const auto& c : counts) total += double(c.second);
+  for (const auto& c : counts) bits -= double(c.second) * std::log2(double(c.second) / total);
+  return total > 0 ? bits / total : 0;
+}
+
+// The 16-bit code of a decoded form factor (ffcodec.cpp: the float's
+// exponent, rebased by 96, and its top 11 fraction bits), or -1 for one
+// sent escaped (outside the codes' range).
+long Code16(float f) {
+  uint32_t bits;
+  std::memcpy(&bits, &f, 4);
+  const uint32_t low = 96u << 23, high = low + (uint32_t(0xffff) << 12);
+  if (bits < low + (1u << 12) || bits > high || (bits & 0xfff)) return -1;
+  return long((bits - low) >> 12);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: radiosity-ffbytes SCENE.obj SHOTS [R]\n");
+    return 2;
+  }
+  const long shots = std::atol(argv[2]);
+  const int res = argc > 3 ? std::atoi(argv[3]) : 256;
+  Scene scene;
+  Mesh mesh;
+  LoadMeshOrDie("radiosity-ffbytes", argv[1], &scene, &mesh);
+  std::string err;
+
+  std::vector<proto::Column> columns;
+  std::vector<std::string> frames;
+  {
+    Solver solver(mesh, true);
+    Hemicube h(res);
+    for (long i = 0; i < shots; ++i) {
+      const int p = solver.Select();
+      if (p < 0) break;
+      proto::Column col;
+      col.patch = p;
+      col.k = solver.TimesShot(p);
+      ShotColumn(&h, mesh, p, GroupOf(mesh, p), col.k, true, 1, &col.ff);
+      frames.emplace_back();
+      proto::EncodeColumn(col, &frames.back());
+      // What the master shoots is what it decodes.
+      proto::Column got;
+      if (!proto::DecodeColumn(std::string_view(frames.back()).substr(proto::kHeaderSize), &got,
+                               &err)) {
+        std::fprintf(stderr, "radiosity-ffbytes: %s\n", err.c_str());
+        return 1;
+      }
+      solver.Shoot(p, got.ff);
+      columns.push_back(std::move(col));
+      columns.back().ff = std::move(got.ff);  // the decoded values: their codes
+    }
+  }
+  double ffs = 0, now_bytes = 0;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    ffs += double(columns[i].ff.size());
+    now_bytes += double(frames[i].size());
+  }
+  if (ffs == 0) {
+    std::fprintf(stderr, "radiosity-ffbytes: no form factors in %zu columns\n", frames.size());
+    return 1;
+  }
+  std::string name = argv[1];
+  name = name.substr(name.find_last_of('/') + 1);
+  name = name.substr(0, name.rfind(".obj"));
+  auto row = [&](const char* what, double bytes, double enc_s, double dec_s) {
+    std::printf("| %s | %d | %zu | %.0f | %s | %.3f | %.2f |", name.c_str(), res, frames.size(),
+                ffs / double(frames.size()), what, bytes / ffs, bytes / now_bytes);
+    if (enc_s >= 0) std::printf(" %.2f | %.2f |\n", 1e9 * enc_s / ffs, 1e9 * dec_s / ffs);
+    else std::printf(" - | - |\n");
+  };
+
+  proto::Column got;
+  std::string out;
+  const double now_enc = Quickest([&] {
+    for (const proto::Column& c : columns) proto::EncodeColumn(c, &out), out.clear();
+  });
+  const double now_dec = Quickest([&] {
+    for (const std::string& f : frames)
+      proto::DecodeColumn(std::string_view(f).substr(proto::kHeaderSize), &got, &err);
+  });
+  row("now", now_bytes, now_enc, now_dec);
+
+  // Compressed frames: each alone, then decompressed and decoded.
+  std::vector<std::string> packed(frames.size());
+  std::string back;
+  auto compressor = [&](const char* what, const auto& pack, const auto& unpack) {
+    const double enc = Quickest([&] {
+      for (size_t i = 0; i < frames.size(); ++i) pack(frames[i], &packed[i]);
+    });
+    double bytes = 0;
+    for (const std::string& p : packed) bytes += double(p.size());
+    const double dec = Quickest([&] {
+      for (size_t i = 0; i < frames.size(); ++i) {
+        unpack(packed[i], frames[i].size(), &back);
+        proto::DecodeColumn(std::string_view(back).substr(proto::kHeaderSize), &got, &err);
+      }
+    });
+    for (size_t i = 0; i < frames.size(); ++i) {  // round trip: what was packed comes back
+      unpack(packed[i], frames[i].size(), &back);
+      if (back != frames[i]) {
+        std::fprintf(stderr, "radiosity-ffbytes: %s: frame %zu does not come back\n", what, i);
+        std::exit(1);
+      }
+    }
+    row(what, bytes, now_enc + enc, dec);
+  };
+  compressor(
+      "+ lz4",
+      [](const std::string& in, std::string* o) {
+        o->resize(size_t(LZ4_compressBound(int(in.size()))));
+        o->resize(size_t(LZ4_compress_default(in.data(), o->data(), int(in.size()), int(o->size()))));
+      },
+      [](const std::string& in, size_t n, std::string* o) {
+        o->resize(n);
+        LZ4_decompress_safe(in.data(), o->data(), int(in.size()), int(n));
+      });
+  ZSTD_CCtx* cctx = ZSTD_createCCtx();
+  ZSTD_DCtx* dctx = ZSTD_createDCtx();
+  for (int level : {1, 3}) {
+    const std::string what = "+ zstd -" + std::to_string(level);
+    compressor(
+        what.c_str(),
+        [&](const std::string& in, std::string* o) {
+          o->resize(ZSTD_compressBound(in.size()));
+          o->resize(ZSTD_compressCCtx(cctx, o->data(), o->size(), in.data(), in.size(), level));
+        },
+        [&](const std::string& in, size_t n, std::string* o) {
+          o->resize(n);
+          ZSTD_decompressDCtx(dctx, o->data(), n, in.data(), in.size());
+        });
+  }
+  ZSTD_freeCCtx(cctx);
+  ZSTD_freeDCtx(dctx);
+
+  // Entropy bounds: the frames less 2 bytes a 16-bit code (what the runs,
+  // header and escapes take), plus the codes at their entropy; then the
+  // differences of coarser codes (the fraction cut to 9 or 8 of its 11
+  // bits: what fewer bits would leave to code, at an error per form factor
+  // of 2^-10 or 2^-9 instead of 2^-12, before error diffusion).
+  double coded = 0;
+  auto entropy = [&](int drop, bool delta) {
+    std::map<long, long> counts;
+    coded = 0;
+    for (const proto::Column& c : columns) {
+      long last = 0;
+      for (const FormFactor& ff : c.ff) {
+        const long code = Code16(ff.f);
+        if (code < 0) continue;
+        const long k = code >> drop;
+        ++counts[delta ? k - last : k];
+        last = k;
+        ++coded;
+      }
+    }
+    return Entropy(counts);
+  };
+  const double h_codes = entropy(0, false), h_deltas = entropy(0, true);
+  const double rest = now_bytes - 2 * coded;
+  row("codes H0", rest + coded * h_codes / 8, -1, -1);
+  row("deltas H0", rest + coded * h_deltas / 8, -1, -1);
+  row("deltas H0, 9-bit fraction", rest + coded * entropy(2, true) / 8, -1, -1);
+  row("deltas H0, 8-bit fraction", rest + coded * entropy(3, true) / 8, -1, -1);
+  return 0;
+}
