@@ -83,12 +83,12 @@ class ShooterQueue {
   // Shooters whose exact power Best() computed since the last Build.
   long Visited() const { return visited_; }
 
-  // The addresses Set(i) reads or writes beyond the inner nodes (which
-  // stay in the caches), appended to *out: what a shot waits on per
+  // The addresses Set(i) writes and those it only reads, beyond the inner
+  // nodes (which stay in the caches), appended: what a shot waits on per
   // shooter it reaches (Solver::ShotLines).
-  void Touches(int i, std::vector<const void*>* out) const {
-    out->push_back(&taken_[size_t(i)]);
-    out->push_back(&tree_[size_t(i)]);
+  void Touches(int i, std::vector<const void*>* written, std::vector<const void*>* read) const {
+    written->push_back(&tree_[size_t(i)]);
+    read->push_back(&taken_[size_t(i)]);
   }
 
  private:

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <type_traits>
 
 #include "check.h"
@@ -709,21 +710,29 @@ double Solver::PowerRatio() const {
   return s / emitted_;
 }
 
-void Solver::ShotLines(const std::vector<FormFactor>& column, std::vector<const char*>* out) const {
-  std::vector<const void*> at;
+void Solver::ShotLines(const std::vector<FormFactor>& column, std::vector<const char*>* written,
+                       std::vector<const char*>* read) const {
+  std::vector<const void*> w, r;
   for (const FormFactor& ff : column) {
     const size_t e = size_t(ff.elem);
-    at.push_back(&elem_[e]);
-    at.push_back(&patch_of_[e]);
+    w.push_back(&elem_[e]);
+    r.push_back(&patch_of_[e]);
     // From the mesh, so that listing them reads none of the lines (a
     // divided element counts its patch only, not its leaves').
     const int32_t q = mesh_.elems[e].patch;
-    at.push_back(&patch_[size_t(q)]);
-    queue_.Touches(q, &at);
+    w.push_back(&patch_[size_t(q)]);
+    queue_.Touches(q, &w, &r);
   }
-  out->clear();
-  for (const void* a : at)
-    out->push_back(reinterpret_cast<const char*>(reinterpret_cast<uintptr_t>(a) & ~uintptr_t(63)));
-  std::sort(out->begin(), out->end());
-  out->erase(std::unique(out->begin(), out->end()), out->end());
+  auto lines = [](const std::vector<const void*>& at, std::vector<const char*>* out) {
+    out->clear();
+    for (const void* a : at)
+      out->push_back(reinterpret_cast<const char*>(reinterpret_cast<uintptr_t>(a) & ~uintptr_t(63)));
+    std::sort(out->begin(), out->end());
+    out->erase(std::unique(out->begin(), out->end()), out->end());
+  };
+  lines(w, written);
+  std::vector<const char*> all;
+  lines(r, &all);
+  read->clear();
+  std::set_difference(all.begin(), all.end(), written->begin(), written->end(), std::back_inserter(*read));
 }

@@ -136,14 +136,16 @@ class Solver {
   // Σ B·area over all elements / Σ emitted·area: grows without bound when
   // a closed scene reflects everything.
   double PowerRatio() const;
-  // The 64-byte cache lines that Shoot(p, column) reads or writes for the
+  // The 64-byte cache lines that Shoot(p, column) touches for the
   // column's elements and the patches they reach (their records here and
   // their leaves in the shooter queue), as laid out now: their first
-  // bytes, each line once, in increasing address order, into *out. At
-  // 10^5 elements and more they are scattered over arrays larger than the
-  // caches, and a shot waits on each (bench/master.cpp's memory floor). A
-  // column's ids are as Shoot takes them (increasing).
-  void ShotLines(const std::vector<FormFactor>& column, std::vector<const char*>* out) const;
+  // bytes, each line once, in increasing address order, those it writes
+  // into *written and those it only reads into *read. At 10^5 elements
+  // and more they are scattered over arrays larger than the caches, and a
+  // shot waits on each (bench/master.cpp's memory floor). A column's ids
+  // are as Shoot takes them (increasing).
+  void ShotLines(const std::vector<FormFactor>& column, std::vector<const char*>* written,
+                 std::vector<const char*>* read) const;
   bool Dark() const { return emitted_ == 0; }
   long shots() const { return shots_; }
   int TimesShot(int p) const { return times_shot_[p]; }

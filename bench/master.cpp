@@ -11,7 +11,7 @@
 // (without waves), timed per pass, with the share of the leaves it
 // evaluated; --every-leaf: every leaf every pass, as before issue 14.
 // Then the memory floor (not with --divide): each shot's cache lines
-// read alone, per shot and per line. --rounds N: N replays instead of 3,
+// touched alone, per shot and per line. --rounds N: N replays instead of 3,
 // the quickest kept; --thread-cpu:
 // each part timed on the thread's CPU clock (a system call, about half a
 // microsecond a read, four a shot) rather than the wall clock scaled to
@@ -155,44 +155,54 @@ int main(int argc, char** argv) {
       shoot_s = sho;
     }
   }
-  // The memory floor: a round more in which each shot's cache lines
-  // (Solver::ShotLines: its elements' and patches' records and queue
-  // leaves; listed for every shot first, so that listing them does not
-  // stir the caches between shots) are read, in address order and
-  // fetched 32 ahead as Shoot fetches them, and timed alone; then the
-  // shot, not timed. At 10^5 elements and more the lines are scattered
-  // over arrays larger than the caches: the time the memory takes to
-  // deliver them, which no arrangement of the work on them goes below.
+  // The memory floor: rounds more in which each shot's cache lines
+  // (Solver::ShotLines: its elements' and patches' records, their patch
+  // ids, the queue's leaves and flags; listed for every shot first, so
+  // that listing them does not stir the caches between shots) are
+  // touched alone, as Shoot touches them: those it writes read and
+  // written back, then those it only reads, each in address order and
+  // fetched 32 ahead as Shoot fetches them, timed; then the shot, not
+  // timed. At 10^5 elements and more the lines are scattered over arrays
+  // larger than the caches: the time the memory takes to deliver them and
+  // take back the dirty ones, which no arrangement of the work on them
+  // goes below.
   double floor_s = HUGE_VAL;
   long lines = 0;
   for (int round = 0; round < (divide ? 0 : rounds); ++round) {
     Solver solver(mesh, overshoot);  // without divisions its layout stays as it is now
     proto::Column got;
-    std::vector<std::vector<const char*>> at(frames.size());
+    std::vector<std::vector<const char*>> written(frames.size()), read(frames.size());
     lines = 0;
     for (size_t i = 0; i < frames.size(); ++i) {
       if (!proto::DecodeColumn(std::string_view(frames[i]).substr(proto::kHeaderSize), &got, &err))
         return 1;  // decoded once already, above
-      solver.ShotLines(got.ff, &at[i]);
-      lines += long(at[i].size());
+      solver.ShotLines(got.ff, &written[i], &read[i]);
+      lines += long(written[i].size() + read[i].size());
     }
     unsigned sum = 0;
-    double read_s = 0;
+    double touch_s = 0;
     const double cpu0 = ThreadCpuSeconds(), wall0 = MonotonicSeconds();
     for (size_t k = 0; k < frames.size(); ++k) {
       const int p = solver.Select();
-      const std::vector<const char*>& a = at[k];
+      const std::vector<const char*>& w = written[k];
+      const std::vector<const char*>& r = read[k];
       const double t0 = clock();
-      for (size_t i = 0; i < a.size(); ++i) {
-        if (i + 32 < a.size()) __builtin_prefetch(a[i + 32]);
-        sum += *reinterpret_cast<const volatile unsigned char*>(a[i]);
+      for (size_t i = 0; i < w.size(); ++i) {
+        if (i + 32 < w.size()) __builtin_prefetch(w[i + 32], 1);
+        // The byte as it is, written back: the line dirty as Shoot leaves it.
+        volatile char* c = const_cast<char*>(w[i]);
+        *c = *c;
       }
-      read_s += clock() - t0;
+      for (size_t i = 0; i < r.size(); ++i) {
+        if (i + 32 < r.size()) __builtin_prefetch(r[i + 32]);
+        sum += *reinterpret_cast<const volatile unsigned char*>(r[i]);
+      }
+      touch_s += clock() - t0;
       proto::DecodeColumn(std::string_view(frames[k]).substr(proto::kHeaderSize), &got, &err);
       solver.Shoot(p, got.ff);
     }
-    if (!thread_cpu) read_s *= (ThreadCpuSeconds() - cpu0) / (MonotonicSeconds() - wall0);
-    floor_s = std::min(floor_s, read_s);
+    if (!thread_cpu) touch_s *= (ThreadCpuSeconds() - cpu0) / (MonotonicSeconds() - wall0);
+    floor_s = std::min(floor_s, touch_s);
     if (sum == 1) std::fprintf(stderr, " ");  // the reads are used
   }
   const double n = double(std::max(1L, done)), per = double(covered) / n;

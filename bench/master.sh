@@ -7,7 +7,7 @@
 #  2. the master's work per shot on recorded columns (build/radiosity-master:
 #     select, decode, shoot) against the target 10 us + 5 ns per covered
 #     element, and the memory floor under shooting (the lines it touches,
-#     read alone)
+#     touched alone)
 #  3. division pass time per size (10^3 to 10^6 elements: DIVIDE_SCENES,
 #     DIVIDE_SHOTS shots, default 300), evaluating the leaves that may
 #     divide against evaluating every leaf (radiosity-master --divide)
@@ -89,7 +89,8 @@ echo "columns computed first, then select, decode and shoot timed alone on the t
 echo "CPU clock, the quickest of $ROUNDS replays): us per shot, and the target 10 us + 5 ns"
 echo "per covered element; then the memory floor: the cache lines a shot touches (its"
 echo "elements' and patches' records, element patch ids, the queue's leaves and flags),"
-echo "read alone in address order and timed per shot (us), and per line (ns)"
+echo "touched alone in address order (written back where shooting writes them) and timed"
+echo "per shot (us), and per line (ns)"
 echo
 echo "| scene | overshoot | patches | elements | shots | covered/shot | select | decode | shoot | master | target | ns per covered element beyond 10 us | lines/shot | floor | ns/line |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"

@@ -236,9 +236,10 @@ TEST(Solver, EndWaveFreesTheTracksNewWaveStartsAgain) {
 }
 
 // ShotLines (bench/master.cpp's memory floor) lists each line Shoot
-// touches once, in address order: an element alone is five (its record,
-// its patch id, its patch's record, the queue's leaf and flag), and a
-// column's include every element's B and one record per patch reached.
+// touches once, in address order, written or only read: an element alone
+// is three written (its record, its patch's, the queue's leaf) and two
+// read (its patch id, the queue's taken flag), and a column's include
+// every element's B and one record per patch reached among those written.
 TEST(Solver, ShotLinesAreTheLinesShootTouches) {
   const Mesh m = ShippedMesh("room");
   Hemicube h(32);
@@ -250,24 +251,28 @@ TEST(Solver, ShotLinesAreTheLinesShootTouches) {
   auto line = [](const void* a) {
     return reinterpret_cast<const char*>(reinterpret_cast<uintptr_t>(a) & ~uintptr_t(63));
   };
-  std::vector<const char*> lines;
-  s.ShotLines({column[0]}, &lines);
-  ASSERT_EQ(lines.size(), 5u);
-  EXPECT_TRUE(std::count(lines.begin(), lines.end(), line(&s.radiosity()[size_t(column[0].elem)])));
-  s.ShotLines(column, &lines);
+  std::vector<const char*> written, read;
+  s.ShotLines({column[0]}, &written, &read);
+  ASSERT_EQ(written.size(), 3u);
+  EXPECT_EQ(read.size(), 2u);
+  EXPECT_TRUE(std::count(written.begin(), written.end(), line(&s.radiosity()[size_t(column[0].elem)])));
+  s.ShotLines(column, &written, &read);
   std::set<int32_t> patches;
   for (const FormFactor& ff : column) {
     patches.insert(m.elems[size_t(ff.elem)].patch);
-    EXPECT_TRUE(std::binary_search(lines.begin(), lines.end(), line(&s.radiosity()[size_t(ff.elem)])));
+    EXPECT_TRUE(std::binary_search(written.begin(), written.end(), line(&s.radiosity()[size_t(ff.elem)])));
   }
-  EXPECT_GE(lines.size(), patches.size() + 2);  // and the arrays of ids, leaves and flags
-  EXPECT_LE(lines.size(), 5 * column.size());
-  for (size_t i = 0; i < lines.size(); ++i) {
-    EXPECT_EQ(reinterpret_cast<uintptr_t>(lines[i]) % 64, 0u);
-    if (i > 0) {
-      EXPECT_LT(lines[i - 1], lines[i]);
+  EXPECT_GE(written.size(), patches.size() + 1);  // and the queue's leaves
+  EXPECT_GE(read.size(), 2u);                     // patch ids, taken flags
+  EXPECT_LE(written.size() + read.size(), 5 * column.size());
+  for (const std::vector<const char*>* v : {&written, &read})
+    for (size_t i = 0; i < v->size(); ++i) {
+      EXPECT_EQ(reinterpret_cast<uintptr_t>((*v)[i]) % 64, 0u);
+      if (i > 0) {
+        EXPECT_LT((*v)[i - 1], (*v)[i]);
+      }
     }
-  }
+  for (const char* a : read) EXPECT_FALSE(std::binary_search(written.begin(), written.end(), a));
 }
 
 TEST(Solver, DarkSceneConvergesToBlack) {
