@@ -34,11 +34,9 @@
 #include <vector>
 
 #include "bench/load.h"
+#include "bench/record.h"
 #include "clock.h"
-#include "groups.h"
-#include "hemicube.h"
 #include "protocol.h"
-#include "solver.h"
 
 namespace {
 
@@ -87,32 +85,11 @@ int main(int argc, char** argv) {
   LoadMeshOrDie("radiosity-ffbytes", argv[1], &scene, &mesh);
   std::string err;
 
-  std::vector<proto::Column> columns;
-  std::vector<std::string> frames;
-  {
-    Solver solver(mesh, true);
-    Hemicube h(res);
-    for (long i = 0; i < shots; ++i) {
-      const int p = solver.Select();
-      if (p < 0) break;
-      proto::Column col;
-      col.patch = p;
-      col.k = solver.TimesShot(p);
-      ShotColumn(&h, mesh, p, GroupOf(mesh, p), col.k, true, 1, &col.ff);
-      frames.emplace_back();
-      proto::EncodeColumn(col, &frames.back());
-      // What the master shoots is what it decodes.
-      proto::Column got;
-      if (!proto::DecodeColumn(std::string_view(frames.back()).substr(proto::kHeaderSize), &got,
-                               &err)) {
-        std::fprintf(stderr, "radiosity-ffbytes: %s\n", err.c_str());
-        return 1;
-      }
-      solver.Shoot(p, got.ff);
-      columns.push_back(std::move(col));
-      columns.back().ff = std::move(got.ff);  // the decoded values: their codes
-    }
-  }
+  const std::vector<std::string> frames = RecordFrames("radiosity-ffbytes", mesh, shots, res, true);
+  // The columns as the master decodes them: the values of their codes.
+  std::vector<proto::Column> columns(frames.size());
+  for (size_t i = 0; i < frames.size(); ++i)
+    proto::DecodeColumn(std::string_view(frames[i]).substr(proto::kHeaderSize), &columns[i], &err);
   double ffs = 0, now_bytes = 0;
   for (size_t i = 0; i < frames.size(); ++i) {
     ffs += double(columns[i].ff.size());

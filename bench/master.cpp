@@ -25,9 +25,8 @@
 #include <vector>
 
 #include "clock.h"
-#include "groups.h"
-#include "hemicube.h"
 #include "bench/load.h"
+#include "bench/record.h"
 #include "mesh.h"
 #include "protocol.h"
 #include "scene.h"
@@ -61,29 +60,7 @@ int main(int argc, char** argv) {
   // not timed); then the master's work alone on them, three times on
   // fresh solvers (the same choices: deterministic), the quickest kept,
   // with the caches its own as a master's are beside its workers.
-  std::vector<std::string> frames;
-  {
-    Solver solver(mesh, overshoot);
-    Hemicube h(res);
-    proto::Column col;
-    for (long i = 0; i < shots; ++i) {
-      const int p = solver.Select();
-      if (p < 0) break;
-      col.patch = p;
-      col.k = solver.TimesShot(p);
-      ShotColumn(&h, mesh, p, GroupOf(mesh, p), col.k, true, 1, &col.ff);
-      frames.emplace_back();
-      proto::EncodeColumn(col, &frames.back());
-      // What the master shoots is what it decodes (16-bit codes).
-      proto::Column got;
-      if (!proto::DecodeColumn(std::string_view(frames.back()).substr(proto::kHeaderSize), &got,
-                               &err)) {
-        std::fprintf(stderr, "radiosity-master: %s\n", err.c_str());
-        return 1;
-      }
-      solver.Shoot(p, got.ff);
-    }
-  }
+  const std::vector<std::string> frames = RecordFrames("radiosity-master", mesh, shots, res, overshoot);
   double select_s = HUGE_VAL / 4, decode_s = 0, shoot_s = 0, pass_s = 0, pass_max = 0, policy_s = 0;
   long covered = 0, done = 0, passes = 0, divided = 0, evaluated = 0, leaves = 0;
   std::vector<int32_t> changed;
