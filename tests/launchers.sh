@@ -4,12 +4,16 @@
 #  * Slurm: a one-node cluster on 127.0.0.1 that this test configures and
 #    starts in its own directory (its own munged, key and socket; its own
 #    slurm.conf, ports, state, spool and logs; slurmctld and slurmd), and
-#    `srun -N1 -n2` starts two workers there.
-# Each time the master listens on 127.0.0.1:0 with a secret and is held
-# (SIGSTOP) until both workers' connections are made, so that both join
-# however slowly the launcher starts them; then: both joined and none was
-# lost, the master and the launcher exit 0, the answer agrees with -j 0
-# within 0.5% per face, and no worker process is left. The run is short
+#    `srun -N1 -n2` starts two workers there; then the README's Slurm
+#    batch script is submitted with `sbatch -n 2` as a user would.
+# For mpirun and srun the master listens on 127.0.0.1:0 with a secret and
+# is held (SIGSTOP) until both workers' connections are made, so that both
+# join however slowly the launcher starts them (the batch script's master
+# is not held: its two workers, started together by one srun, joined
+# before the sixth of its 2,500 shots in every run here); then: both
+# joined and none was lost, the master and the launcher exit 0, the
+# answer agrees with -j 0 within 0.5% per face, and no worker process is
+# left. The run is short
 # (Cornell box, -r 64, half a second with two workers), undivided and
 # converged to 1e-4: which elements division cuts depends on the order
 # the columns come back in, and so does what is left unshot at the end;
@@ -24,10 +28,11 @@
 # shellcheck source=tests/lib.sh
 . "$(dirname "$0")/lib.sh"
 
-SCENE=$(cd "$(dirname "$0")/../scenes" && pwd)/cornell.obj
 ARGS=(-r 64 -e 1e-4 --no-subdivide)
 SKIPS=0
-M="" L="" MUNGED="" CTLD="" SLURMD=""
+M="" L="" JOB="" MUNGED="" CTLD="" SLURMD=""
+TOP=$(cd "$(dirname "$0")/.." && pwd)
+SCENE=$TOP/scenes/cornell.obj
 # show NAME [N]: the last N lines of run NAME's stderr.
 show() { tail -n "${2:-10}" "$T/$1.err" | sed 's/^/#   /'; }
 skip_part() { echo "skip: $*"; SKIPS=$((SKIPS + 1)); }
@@ -84,6 +89,9 @@ slurm_conf() {
   user=$(id -un)
   cat <<EOF
 ClusterName=radtest
+# The README's batch script takes its port from the job's number: numbered
+# from 1, every run of this test would take the same one.
+FirstJobId=$((RANDOM % 1000 * 1000 + RANDOM % 1000 + 1))
 SlurmctldHost=localhost(127.0.0.1)
 SlurmctldPort=$1
 SlurmdPort=$2
@@ -170,11 +178,58 @@ stop_slurm() {
   SLURMD="" CTLD="" MUNGED=""
 }
 
+# batch_script: the README's Slurm batch script (its fenced block with
+# #SBATCH lines) submitted as a user would, with `radiosity` on the PATH
+# and a HOME of its own; the job and its master end with exit 0, two
+# workers joined and none was lost, the answer agrees with -j 0 and no
+# worker is left. The job's state is polled (sbatch --wait polls every
+# few seconds).
+batch_script() {
+  local jid state
+  mkdir -p "$T/job" "$T/home" "$T/bin"
+  awk '/^```sh$/ { on = 1; b = ""; next }
+       on && /^```$/ { on = 0; if (b ~ /\n#SBATCH /) printf "%s", b; next }
+       on { b = b $0 "\n" }' "$TOP/README.md" >"$T/job/radiosity.sbatch"
+  if ! grep -q "^srun " "$T/job/radiosity.sbatch"; then
+    fail "sbatch: no batch script with srun in README.md"; return
+  fi
+  # A wrapper, not a link: the workers' command line names $RADIOSITY,
+  # which is how no_workers_left finds them.
+  printf '#!/bin/sh\nexec "%s" "$@"\n' "$RADIOSITY" >"$T/bin/radiosity"
+  chmod +x "$T/bin/radiosity"
+  # -n 2 and -O (a node with one processor) override the script's tasks.
+  jid=$(cd "$T/job" && HOME=$T/home PATH=$T/bin:$PATH \
+    sbatch --parsable -n 2 -O -o slurm.out radiosity.sbatch "$SCENE" -v "${ARGS[@]}" 2>&1) ||
+    { fail "sbatch: not submitted ($jid)"; return; }
+  JOB=$jid
+  wait_until "$(run_limit)" _job_ended
+  state=$(job_field JobState)
+  JOB=""
+  if [ "$state" = COMPLETED ] && [ "$(job_field ExitCode "$jid")" = 0:0 ] &&
+     grep -q "workers: 2 joined, 0 lost" "$T/job/slurm.out"; then
+    pass "sbatch: job $jid completed, exit 0, 2 workers joined, none lost"
+    check_same "sbatch: answer" "$T/job/out-$jid/result.csv" "$T/ref/result.csv" 0.5
+  else
+    fail "sbatch: job $jid $state, exit $(job_field ExitCode "$jid") (want COMPLETED, 0:0, 2 workers joined, none lost)"
+    tail -n 10 "$T/job/slurm.out" 2>/dev/null | sed 's/^/#   /'
+  fi
+  no_workers_left "sbatch: no worker process left behind"
+}
+# job_field FIELD [JOB]: FIELD of `scontrol show job` (the job stays
+# listed for MinJobAge, 300 s, after it ends).
+job_field() {
+  timeout 5 scontrol -o show job "${2:-$JOB}" 2>/dev/null | tr ' ' '\n' | sed -n "s/^$1=//p"
+}
+_job_ended() {
+  case $(job_field JobState) in PENDING|CONFIGURING|RUNNING|COMPLETING|"") return 1 ;; esac
+}
+
 # Whatever happens: the master resumed (a stopped process ignores TERM)
 # and ended, the launcher ended, the cluster's daemons stopped.
 cleanup() {
   [ -n "$M" ] && { kill -CONT "$M"; kill "$M"; } 2>/dev/null
   [ -n "$L" ] && kill "$L" 2>/dev/null
+  [ -n "$JOB" ] && timeout 5 scancel "$JOB"
   stop_slurm
   rm -rf "$T"
 }
@@ -196,7 +251,7 @@ fi
 
 # --- Slurm.
 missing=""
-for tool in munged slurmctld slurmd srun sinfo; do
+for tool in munged slurmctld slurmd srun sinfo sbatch scontrol; do
   command -v "$tool" >/dev/null 2>&1 || missing="$missing $tool"
 done
 if [ -n "$missing" ]; then
@@ -206,6 +261,7 @@ elif ! start_slurm; then
 else
   echo "# slurm: cluster radtest, node localhost idle, slurmctld port $(sed -n 's/^SlurmctldPort=//p' "$SLURM_CONF")"
   launched srun srun -N1 -n2 --overcommit
+  batch_script
 fi
 
 [ "$FAILS" -eq 0 ] && [ "$SKIPS" -gt 0 ] && { echo "$CHECKS checks, 0 failed, $SKIPS part(s) skipped"; exit 77; }
