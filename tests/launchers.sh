@@ -187,12 +187,7 @@ stop_slurm() {
 batch_script() {
   local jid state
   mkdir -p "$T/job" "$T/home" "$T/bin"
-  awk '/^```sh$/ { on = 1; b = ""; next }
-       on && /^```$/ { on = 0; if (b ~ /\n#SBATCH /) printf "%s", b; next }
-       on { b = b $0 "\n" }' "$TOP/README.md" >"$T/job/radiosity.sbatch"
-  if ! grep -q "^srun " "$T/job/radiosity.sbatch"; then
-    fail "sbatch: no batch script with srun in README.md"; return
-  fi
+  cp "$T/readme.sbatch" "$T/job/radiosity.sbatch"
   # A wrapper, not a link: the workers' command line names $RADIOSITY,
   # which is how no_workers_left finds them.
   printf '#!/bin/sh\nexec "%s" "$@"\n' "$RADIOSITY" >"$T/bin/radiosity"
@@ -234,6 +229,20 @@ cleanup() {
   rm -rf "$T"
 }
 trap cleanup EXIT
+
+# The batch script: README.md's fenced block with #SBATCH lines, and the
+# man page's example with them (roff's \- and \e read as - and \).
+awk '/^```sh$/ { on = 1; b = ""; next }
+     on && /^```$/ { on = 0; if (b ~ /\n#SBATCH /) printf "%s", b; next }
+     on { b = b $0 "\n" }' "$TOP/README.md" >"$T/readme.sbatch"
+awk '/^\.EX$/ { on = 1; b = ""; next }
+     on && /^\.EE$/ { on = 0; if (b ~ /\n#SBATCH /) printf "%s", b; next }
+     on { b = b $0 "\n" }' "$TOP/man/radiosity.1" | sed 's/\\-/-/g; s/\\e/\\/g' >"$T/man.sbatch"
+if grep -q "^srun " "$T/readme.sbatch" && cmp -s "$T/readme.sbatch" "$T/man.sbatch"; then
+  pass "README.md and the man page show one Slurm batch script ($(wc -l <"$T/readme.sbatch") lines, with srun)"
+else
+  fail "README.md's Slurm batch script (with srun) is the man page's (diff: $(diff "$T/readme.sbatch" "$T/man.sbatch" | head -3 | tr '\n' ' '))"
+fi
 
 run_ok "sequential reference" "$T/ref" -j 0 "${ARGS[@]}" "$SCENE" || finish
 head -c 32 /dev/urandom | base64 >"$T/secret"
