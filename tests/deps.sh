@@ -7,10 +7,12 @@ for p in $pkgs; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing="$missing $p"
 done
 # The fuzz targets (make fuzz; make check runs them briefly) need clang and
-# libFuzzer, and tests/view.sh a browser (headless Chromium); without them
-# make check skips those tests, so a failure to install these is only a
-# warning.
-optional_pkgs="clang libclang-rt-dev chromium"
+# libFuzzer, tests/view.sh a browser (headless Chromium), and
+# tests/launchers.sh the cluster launchers it starts workers with (Open
+# MPI's mpirun; Slurm's daemons and srun, authenticated by munge); without
+# them make check skips those tests, so a failure to install these is only
+# a warning.
+optional_pkgs="clang libclang-rt-dev chromium openmpi-bin slurm-wlm munge"
 optional_missing=""
 for p in $optional_pkgs; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || optional_missing="$optional_missing $p"
@@ -21,7 +23,7 @@ SUDO=""
 if [ "$(id -u)" != 0 ]; then
   if command -v sudo >/dev/null 2>&1; then SUDO=sudo; elif [ -n "$missing" ]; then
     echo "radiosity: need root (or sudo) to install:$missing" >&2; exit 1; else
-    echo "radiosity: warning: need root (or sudo) to install:$optional_missing; the fuzz and view tests will be skipped" >&2; exit 0; fi
+    echo "radiosity: warning: need root (or sudo) to install:$optional_missing; the fuzz, view and launcher tests will be skipped" >&2; exit 0; fi
 fi
 $SUDO apt-get update -q || { [ -z "$missing" ] || {
   echo "radiosity: could not install:$missing (apt-get update failed; install them by hand)" >&2
@@ -34,6 +36,6 @@ if [ -n "$missing" ]; then
 fi
 if [ -n "$optional_missing" ]; then
   $SUDO apt-get install -y -q $optional_missing ||
-    echo "radiosity: warning: could not install:$optional_missing; the fuzz and view tests will be skipped" >&2
+    echo "radiosity: warning: could not install:$optional_missing; the fuzz, view and launcher tests will be skipped" >&2
 fi
 exit 0
