@@ -34,8 +34,12 @@ if [ -n "$missing" ]; then
     exit 1
   }
 fi
-if [ -n "$optional_missing" ]; then
-  $SUDO apt-get install -y -q $optional_missing ||
-    echo "radiosity: warning: could not install:$optional_missing; the fuzz, view and launcher tests will be skipped" >&2
+# All at once, and where that fails one by one, so that one package the
+# archive lacks (chromium on some mirrors) does not keep the others out.
+if [ -n "$optional_missing" ] && ! $SUDO apt-get install -y -q $optional_missing; then
+  for p in $optional_missing; do
+    $SUDO apt-get install -y -q "$p" ||
+      echo "radiosity: warning: could not install $p; the tests that need it will be skipped" >&2
+  done
 fi
 exit 0
