@@ -422,11 +422,19 @@ void Scheduler::Subdivide() {
 // The end of a wave (paper §4.4): a picture of it, then the radiosity is
 // thrown away and shooting starts again from the emitters on the finer
 // mesh. Columns in flight are still shot: they are columns of the same
-// geometry.
+// geometry. Patches prepared and not yet sent go back: they were chosen
+// by the old wave's powers and now have next to none, and while they
+// filled a queue the new wave's lights went to whichever worker had room,
+// a stopped one too, which then held all the power until it was dropped
+// (tests/parallel.sh's SIGSTOP, 1 run in 6 at a wave's start).
 void Scheduler::NextWave() {
   solver_->EndWave();
   if (opts_.wave_end) opts_.wave_end(wave_);
   solver_->NewWave();
+  for (Slot& s : slots_) {
+    for (int p : s.prepared) solver_->Release(p);
+    s.prepared.clear();
+  }
   sub_->StartWave(mesh_);
   ++wave_;
   wave_start_ = best_at_ = solver_->shots();
