@@ -202,6 +202,11 @@ inline void PutEight(FormFactor* out, uint32_t id, const uint8_t* c, U32x4* zero
 }
 }  // namespace
 
+int32_t SentCode(float f) {
+  // A decoded 16-bit code's value is exact: the nearest code is itself.
+  return f > 0 && F16Range(FfCode(f)) ? int32_t(F16Round(double(f))) : -1;
+}
+
 // The hot path: tight loops over the bytes, one allocation, no strings
 // unless it fails. One pass over the runs checks them and writes their
 // ids, and, in the usual case of a column without escapes, where the

@@ -10,6 +10,7 @@
 #ifndef RADIOSITY_FFCODEC_H
 #define RADIOSITY_FFCODEC_H
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,11 @@ void PutFormFactors(const std::vector<FormFactor>& ff, std::string* out);
 // column's last field), into *ff; false with r's error when the bytes are
 // not exactly such a list. The master's hot path.
 bool GetFormFactors(Reader* r, std::vector<FormFactor>* ff);
+
+// The 16-bit code a decoded form factor was sent as, or -1 for one sent
+// escaped (outside the 16-bit codes' range): what a column's codes are,
+// read back from its values (bench/ffbytes.cpp weighs codings of them).
+int32_t SentCode(float f);
 
 }  // namespace proto
 

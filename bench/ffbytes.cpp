@@ -28,7 +28,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <map>
 #include <string>
 #include <vector>
@@ -36,6 +35,7 @@
 #include "bench/load.h"
 #include "bench/record.h"
 #include "clock.h"
+#include "ffcodec.h"
 #include "protocol.h"
 
 namespace {
@@ -60,17 +60,6 @@ double Entropy(const std::map<long, long>& counts) {
   return total > 0 ? bits / total : 0;
 }
 
-// The 16-bit code of a decoded form factor (ffcodec.cpp: the float's
-// exponent, rebased by 96, and its top 11 fraction bits), or -1 for one
-// sent escaped (outside the codes' range).
-long Code16(float f) {
-  uint32_t bits;
-  std::memcpy(&bits, &f, 4);
-  const uint32_t low = 96u << 23, high = low + (uint32_t(0xffff) << 12);
-  if (bits < low + (1u << 12) || bits > high || (bits & 0xfff)) return -1;
-  return long((bits - low) >> 12);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -88,8 +77,7 @@ int main(int argc, char** argv) {
   const std::vector<std::string> frames = RecordFrames("radiosity-ffbytes", mesh, shots, res, true);
   // The columns as the master decodes them: the values of their codes.
   std::vector<proto::Column> columns(frames.size());
-  for (size_t i = 0; i < frames.size(); ++i)
-    proto::DecodeColumn(std::string_view(frames[i]).substr(proto::kHeaderSize), &columns[i], &err);
+  for (size_t i = 0; i < frames.size(); ++i) DecodeFrame("radiosity-ffbytes", frames[i], &columns[i]);
   double ffs = 0, now_bytes = 0;
   for (size_t i = 0; i < frames.size(); ++i) {
     ffs += double(columns[i].ff.size());
@@ -184,7 +172,7 @@ int main(int argc, char** argv) {
     for (const proto::Column& c : columns) {
       long last = 0;
       for (const FormFactor& ff : c.ff) {
-        const long code = Code16(ff.f);
+        const long code = proto::SentCode(ff.f);
         if (code < 0) continue;
         const long k = code >> drop;
         ++counts[delta ? k - last : k];

@@ -241,6 +241,8 @@ TEST(FfCodec, ColumnSixteenBitCodesAreTheDocumentedValues) {
   }
   EXPECT_EQ(double(d.ff.front().f), std::ldexp(1 + 1.0 / 2048, -31));
   EXPECT_EQ(double(d.ff.back().f), 2 - 1.0 / 2048);
+  // Each value read back to the code it was sent as.
+  for (uint32_t q = 1; q <= 0xffff; ++q) ASSERT_EQ(proto::SentCode(d.ff[q - 1].f), int32_t(q));
   // And the encoder makes exactly these codes from these values.
   proto::Column again = d;
   std::string frame;
@@ -258,6 +260,9 @@ TEST(FfCodec, ColumnEscapesValuesOutsideTheSixteenBitCodes) {
                                       Esc(Code24(3.0f)), Esc(1)},
                                      0);
   EXPECT_EQ(Hex(p), Hex(want));
+  // Escaped ones have no 16-bit code; 1.5 was sent as 0xfc00.
+  const std::vector<int32_t> sent = {-1, -1, 0xfc00, -1, -1};
+  for (size_t i = 0; i < sent.size(); ++i) EXPECT_EQ(proto::SentCode(d.ff[i].f), sent[i]) << i;
   EXPECT_NEAR(d.ff[0].f, 1e-12f, 1e-12 / (1 << 17));
   EXPECT_NEAR(d.ff[1].f, 1e-30f, 1e-30 / (1 << 17));
   EXPECT_EQ(d.ff[2].f, 1.5f);  // in range: a 16-bit code (31 << 11 | 1024), exact
