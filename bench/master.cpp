@@ -147,13 +147,12 @@ int main(int argc, char** argv) {
   long lines = 0;
   for (int round = 0; round < (divide ? 0 : rounds); ++round) {
     Solver solver(mesh, overshoot);  // without divisions its layout stays as it is now
-    proto::Column got;
+    std::vector<proto::Column> cols(frames.size());
     std::vector<std::vector<const char*>> written(frames.size()), read(frames.size());
     lines = 0;
     for (size_t i = 0; i < frames.size(); ++i) {
-      if (!proto::DecodeColumn(std::string_view(frames[i]).substr(proto::kHeaderSize), &got, &err))
-        return 1;  // decoded once already, above
-      solver.ShotLines(got.ff, &written[i], &read[i]);
+      DecodeFrame("radiosity-master", frames[i], &cols[i]);
+      solver.ShotLines(cols[i].ff, &written[i], &read[i]);
       lines += long(written[i].size() + read[i].size());
     }
     unsigned sum = 0;
@@ -175,8 +174,7 @@ int main(int argc, char** argv) {
         sum += *reinterpret_cast<const volatile unsigned char*>(r[i]);
       }
       touch_s += clock() - t0;
-      proto::DecodeColumn(std::string_view(frames[k]).substr(proto::kHeaderSize), &got, &err);
-      solver.Shoot(p, got.ff);
+      solver.Shoot(p, cols[k].ff);
     }
     if (!thread_cpu) touch_s *= (ThreadCpuSeconds() - cpu0) / (MonotonicSeconds() - wall0);
     floor_s = std::min(floor_s, touch_s);
@@ -194,12 +192,12 @@ int main(int argc, char** argv) {
     const double shots_n = double(std::max<size_t>(1, frames.size()));
     std::printf(" %.0f | %.2f | %.2f |", double(lines) / shots_n, 1e6 * floor_s / shots_n,
                 1e9 * floor_s / double(std::max(1L, lines)));
-  }
-  if (divide)
+  } else {
     std::printf(" %ld | %ld | %.3f | %.2f | %.2f | %.2f |", passes, divided,
                 double(evaluated) / double(std::max(1L, leaves)),
                 1e3 * policy_s / double(std::max(1L, passes)),
                 1e3 * pass_s / double(std::max(1L, passes)), 1e3 * pass_max);
+  }
   std::printf("\n");
   return 0;
 }
