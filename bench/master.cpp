@@ -104,6 +104,7 @@ int main(int argc, char** argv) {
       if (divide && sub.Due(done + 1)) {
         t0 = ThreadCpuSeconds();  // a pass takes milliseconds: the CPU clock's cost is nothing
         solver.TakeChanged(&changed);
+        ConnectEdges(&mesh);  // at the first pass, as Refine makes the adjacency
         const std::vector<int32_t> edits =
             sub.Pass(mesh, solver.radiosity(), solver.noise(), solver.Ambient(), done + 1, changed);
         evaluated += sub.evaluated();
