@@ -426,7 +426,7 @@ void Scheduler::Subdivide() {
 // by the old wave's powers and now have next to none, and while they
 // filled a queue the new wave's lights went to whichever worker had room,
 // a stopped one too, which then held all the power until it was dropped
-// (tests/parallel.sh's SIGSTOP, 1 run in 6 at a wave's start).
+// (tests/parallel.sh's SIGSTOP case, about 1 run in 15).
 void Scheduler::NextWave() {
   solver_->EndWave();
   if (opts_.wave_end) opts_.wave_end(wave_);
