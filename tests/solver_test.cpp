@@ -16,6 +16,14 @@
 
 namespace {
 
+// Two solvers' B, element by element, to the bit.
+void ExpectSameB(const Solver& x, const Solver& y) {
+  const ElemB a = x.radiosity(), b = y.radiosity();
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t e = 0; e < a.size(); ++e)
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(a[e][k], b[e][k]) << "element " << e;
+}
+
 RunResult Solve(Mesh& m, Solver* s, double eps, int res = 64) {
   RunOptions o;
   o.resolution = res;
@@ -191,10 +199,7 @@ TEST(Solver, TrackingDoesNotChangeWhatShootGives) {
   }
   tracked.TakeChanged(&changed);
   EXPECT_FALSE(changed.empty());
-  const ElemB a = plain.radiosity(), b = tracked.radiosity();
-  ASSERT_EQ(a.size(), b.size());
-  for (size_t e = 0; e < a.size(); ++e)
-    for (int k = 0; k < 3; ++k) ASSERT_EQ(a[e][k], b[e][k]) << "element " << e;
+  ExpectSameB(plain, tracked);
 }
 
 // EndWave (before a wave's picture) frees the noise and direct-light
@@ -229,10 +234,7 @@ TEST(Solver, EndWaveFreesTheTracksNewWaveStartsAgain) {
   shoot(100);
   EXPECT_EQ(kept.noise(), ended.noise());
   EXPECT_EQ(kept.direct(), ended.direct());
-  const ElemB a = kept.radiosity(), b = ended.radiosity();
-  ASSERT_EQ(a.size(), b.size());
-  for (size_t e = 0; e < a.size(); ++e)
-    for (int k = 0; k < 3; ++k) ASSERT_EQ(a[e][k], b[e][k]) << "element " << e;
+  ExpectSameB(kept, ended);
 }
 
 // ShotLines (bench/master.cpp's memory floor) lists each line Shoot
