@@ -175,7 +175,7 @@ TEST(Protocol, HelloRoundTrips) {
     std::string frame;
     proto::EncodeHello(h, &frame);
     const std::string p = PayloadOf(frame, Msg::kHello);
-    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x05\x00", 6));  // magic, version
+    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x06\x00", 6));  // magic, version
     proto::Hello d;
     d.magic = 0;
     d.version = 0;
@@ -186,7 +186,7 @@ TEST(Protocol, HelloRoundTrips) {
     EXPECT_EQ(d.build, b);
   }
   // A build string longer than 256 bytes or not printable is refused.
-  std::string p = "RADW" + std::string("\x05\x00", 2);
+  std::string p = "RADW" + std::string("\x06\x00", 2);
   std::string long_build = p;
   WVar(&long_build, 257);
   long_build += std::string(257, 'x');
@@ -859,7 +859,7 @@ TEST(Protocol, FrameReaderGivesALargeFrameBackOnceCopiedOut) {
   // until its next call.
   proto::Column c;
   c.patch = 3;
-  for (int32_t e = 0; e < 700000; ++e) c.ff.push_back({e, 0.5f / 700000});
+  for (int32_t e = 0; e < 1200000; ++e) c.ff.push_back({e, 0.5f / 1200000});
   std::string f;
   proto::EncodeColumn(c, &f);
   ASSERT_GT(f.size(), size_t{1} << 20);
