@@ -7,7 +7,11 @@
 // The columns are the run's own (Select, ShotColumn, Shoot: -j 0's order,
 // no subdivision), each encoded as the worker encodes it (EncodeColumn: a
 // frame). Candidates:
-//   now         the frame as sent (element ids as runs, 16-bit codes)
+//   now         the frame as sent (protocol 6: element ids as runs, 12-bit
+//               codes as differences of 1 or 2 bytes)
+//   16-bit codes  the frame of protocol 5 (the same runs, 16-bit codes of
+//               2 bytes, 5 escaped): its size only, exact (it does not
+//               depend on the codes' values)
 //   + lz4       each frame compressed alone with LZ4 (liblz4), as a
 //               worker would send it
 //   + zstd -1   likewise with Zstandard level 1 (libzstd), and -3
@@ -15,9 +19,9 @@
 //               the run's columns (a bound for an entropy coder with one
 //               static table: no coder, no times)
 //   deltas H0   likewise for each code's difference from the one before it
-//               in the column (a bound for a coder of differences); and
-//               for codes with 9 and 8 fraction bits instead of 11 (what
-//               coarser codes would leave to send)
+//               in the column (a bound for a coder of differences, against
+//               now's bytes for them); and for codes with 6 fraction bits
+//               instead of 7 (what coarser codes would leave to send)
 // Times are the quickest of 3 passes over all columns, per form factor,
 // on the thread's CPU clock; decoding includes DecodeColumn after the
 // decompression, as the master would do both.
@@ -108,6 +112,26 @@ int main(int argc, char** argv) {
   });
   row("now", now_bytes, now_enc, now_dec);
 
+  // Protocol 5: 2 bytes a code and 5 an escape where now has 1 or 2 bytes
+  // a difference and 3 more an escape (SentCode: the 12-bit codes, -1 for
+  // escaped form factors; diff_bytes: now's bytes for the differences of
+  // the codes not escaped).
+  double codes16 = 0, diff_bytes = 0, coded = 0;
+  for (const proto::Column& c : columns) {
+    long last = 0;
+    for (const FormFactor& ff : c.ff) {
+      const long code = proto::SentCode(ff.f);
+      const long d = (code < 0 ? 0 : code) - last;
+      const double b = d >= -112 && d < 112 ? 1 : 2;  // ffcodec.cpp, kShortBias
+      codes16 += 2;
+      if (code < 0) continue;  // escaped: 3 more bytes both ways
+      diff_bytes += b;
+      ++coded;
+      last = code;
+    }
+  }
+  row("16-bit codes (protocol 5)", now_bytes - diff_bytes - (ffs - coded) + codes16, -1, -1);
+
   // Compressed frames: each alone, then decompressed and decoded.
   std::vector<std::string> packed(frames.size());
   std::string back;
@@ -160,15 +184,13 @@ int main(int argc, char** argv) {
   ZSTD_freeCCtx(cctx);
   ZSTD_freeDCtx(dctx);
 
-  // Entropy bounds: the frames less 2 bytes a 16-bit code (what the runs,
-  // header and escapes take), plus the codes at their entropy; then the
-  // differences of coarser codes (the fraction cut to 9 or 8 of its 11
-  // bits: what fewer bits would leave to code, at an error per form factor
-  // of 2^-10 or 2^-9 instead of 2^-12, before error diffusion).
-  double coded = 0;
+  // Entropy bounds: the frames less now's bytes for the differences (what
+  // the runs, header and escapes take), plus the codes at their entropy;
+  // then the differences of coarser codes (the fraction cut to 6 of its 7
+  // bits: what one bit fewer would leave to code, at a rounding of 2^-7
+  // instead of 2^-8 a form factor, before error diffusion).
   auto entropy = [&](int drop, bool delta) {
     std::map<long, long> counts;
-    coded = 0;
     for (const proto::Column& c : columns) {
       long last = 0;
       for (const FormFactor& ff : c.ff) {
@@ -177,16 +199,14 @@ int main(int argc, char** argv) {
         const long k = code >> drop;
         ++counts[delta ? k - last : k];
         last = k;
-        ++coded;
       }
     }
     return Entropy(counts);
   };
   const double h_codes = entropy(0, false), h_deltas = entropy(0, true);
-  const double rest = now_bytes - 2 * coded;
+  const double rest = now_bytes - diff_bytes;
   row("codes H0", rest + coded * h_codes / 8, -1, -1);
   row("deltas H0", rest + coded * h_deltas / 8, -1, -1);
-  row("deltas H0, 9-bit fraction", rest + coded * entropy(2, true) / 8, -1, -1);
-  row("deltas H0, 8-bit fraction", rest + coded * entropy(3, true) / 8, -1, -1);
+  row("deltas H0, 6-bit fraction", rest + coded * entropy(1, true) / 8, -1, -1);
   return 0;
 }
