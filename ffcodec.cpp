@@ -18,7 +18,7 @@ namespace {
 
 // Form factor <-> 24 bits: the float's bits (sign 0) >> 7, rounded to
 // nearest (ties away from zero); never 0 and never inf/NaN. Only for the
-// escape of a column's 16-bit codes (below).
+// escape of a column's 12-bit codes (below).
 constexpr uint32_t kFfMin = 1;           // 2^-142: the smallest code, a subnormal
 constexpr uint32_t kFfLimit = 0xff0000;  // exponent all ones: inf and NaN
 
@@ -95,7 +95,7 @@ uint32_t CodeRound(double x) {
 // then the second bytes and the escapes: the decoder reads code i's first
 // byte at i, and no branch on its length. Neighbouring elements of a
 // patch have near form factors, so most differences are short: 86% of
-// them on the Cornell box, 74% on the maze (R 256).
+// them on the Cornell box, 72% on the maze (R 256).
 constexpr uint32_t kShortCodes = 224;
 constexpr int32_t kShortBias = kShortCodes / 2;
 constexpr int32_t kLongBias = 32 << kFractionBits;  // 4096
@@ -110,7 +110,8 @@ static_assert((256 - kShortCodes) << 8 == 2 * kLongBias, "two bytes hold every d
 // a whole group's bytes are there; stops at a group with a code that is
 // not 1 .. kCodeMax (an escape, or bytes that are no column), which the
 // scalar loop then decodes. Returns where it stopped; *x and *last move on.
-// On the shipped scenes a third of the time of the scalar loop.
+// Decoding a column took 3.4 to 4.6 ns a form factor with the scalar loop
+// alone, 1.5 to 2.0 with this (radiosity-ffbytes, shipped scenes, R 256).
 
 // kSpread[m][j]: where in the second bytes lane j's is, for lanes whose
 // bit is set in m (the long ones), or 0x80 (a zero).
@@ -392,9 +393,10 @@ bool GetFormFactors(Reader* r, std::vector<FormFactor>* out_ff) {
   out_ff->resize(size_t(n));
 
   // The codes: first bytes at p[i], the rest from p[x] on. Without a
-  // branch on the difference's length (one in 5 to 12 is long, at random:
-  // such a branch doubled the time); x may run past the bytes (size), read
-  // at the last byte then, and is checked once at the end.
+  // branch on the difference's length (10% to 28% are long on the shipped
+  // scenes, at random: such a branch made decoding 4.2 to 6.3 ns a form
+  // factor against 3.4 to 4.6 without); x may run past the bytes (size),
+  // read at the last byte then, and is checked once at the end.
   const size_t size = size_t(end - p);
   size_t x = size_t(n);
   uint32_t last = 0;

@@ -2,8 +2,8 @@
 # Bytes on the wire per non-zero form factor (issue 17, "Fewer bytes"):
 # build/radiosity-ffbytes on the shipped scenes at R 64 and 256 and on a
 # room of 3,800 boxes (about 10^5 elements) at R 256, the encoding sent
-# now against general compressors on each frame and entropy bounds for
-# the codes, as one Markdown table on stdout.
+# now (protocol 6) against protocol 5's size, general compressors on each
+# frame and entropy bounds for the codes, as one Markdown table on stdout.
 #   sh bench/ffbytes.sh            (SHOTS, default 300: columns per scene)
 cd "$(dirname "$0")/.." || exit 1
 for b in build/radiosity-ffbytes build/scenegen; do
