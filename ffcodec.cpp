@@ -45,11 +45,12 @@ float FfValue(uint32_t q) {
 // is the next value. Code 0 (2^-31) is the escape instead: a 24-bit code
 // follows. A value has a 12-bit code exactly when its 24-bit code is
 // within those of code 1 and kCodeMax, so that each value has one coding.
-// Why 7 fraction bits: the hemicube's own noise per element (a few pixels
-// more or fewer) is tens of percent, a code step 2^-7; with the rounding
-// carried on (below) the answer moves far less than with the hemicube's
-// seed (README, "Bytes per form factor"), and the differences of codes
-// this coarse mostly fit in one byte.
+// Why 7 fraction bits: the hemicube's own error per element (it covers a
+// whole number of pixels) is far above a code step, 2^-7; with the
+// rounding carried on (below) the answer moves far less than with the
+// hemicube's seed (README, "Bytes per form factor"), and the differences
+// of codes this coarse mostly fit in one byte (1.5 bytes a form factor at
+// most on the shipped scenes; with 8 bits the maze would take 1.8).
 constexpr int kFractionBits = 7;
 constexpr uint32_t kEscape = 0;
 constexpr uint32_t kCodeMax = (32u << kFractionBits) - 1;                 // 4095: 2 - 2^-7
@@ -100,7 +101,6 @@ constexpr uint32_t kShortCodes = 224;
 constexpr int32_t kShortBias = kShortCodes / 2;
 constexpr int32_t kLongBias = 32 << kFractionBits;  // 4096
 static_assert((256 - kShortCodes) << 8 == 2 * kLongBias, "two bytes hold every difference of codes");
-
 
 #ifdef FFCODEC_SSSE3
 // Eight codes at a time, with SSSE3 (checked at run time: the build is
