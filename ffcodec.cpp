@@ -50,7 +50,8 @@ float FfValue(uint32_t q) {
 // rounding carried on (below) the answer moves far less than with the
 // hemicube's seed (README, "Bytes per form factor"), and the differences
 // of codes this coarse mostly fit in one byte (1.5 bytes a form factor at
-// most on the shipped scenes; with 8 bits the maze would take 1.8).
+// most on the shipped scenes; with 8 bits the maze would take about 1.8,
+// from the share of its differences that two bytes would need).
 constexpr int kFractionBits = 7;
 constexpr uint32_t kEscape = 0;
 constexpr uint32_t kCodeMax = (32u << kFractionBits) - 1;                 // 4095: 2 - 2^-7
