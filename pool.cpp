@@ -308,6 +308,12 @@ void WorkerPool::Receive(int w, std::vector<WorkerEvent>* events) {
   }
 }
 
+void WorkerPool::Send(std::vector<WorkerEvent>* events) {
+  for (size_t w = 0; w < workers_.size(); ++w)
+    if (workers_[w].state != State::kLost && workers_[w].Writing(scene_frame_.size()))
+      Flush(int(w), events);
+}
+
 void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
   const size_t before = events->size();
   double now = Clk();

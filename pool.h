@@ -106,6 +106,7 @@ class WorkerPool : public Transport {
   void Assign(int w, const proto::Assignment& a) override;
   void Divide(const std::vector<int32_t>& elems) override;
   void Poll(double timeout, std::vector<WorkerEvent>* events) override;
+  void Send(std::vector<WorkerEvent>* events) override;
   // The run's clock: 0 until the first worker joins, so that waiting for
   // workers (connect-back, ssh set-up, start-up) does not count against
   // -t; the deadlines go by the pool's own clock.

@@ -28,7 +28,7 @@ best() {
   i=0
   while [ $i -lt "$ROUNDS" ]; do
     if [ "$4" = feed ]; then
-      "$1" -v -j 1 --worker-cmd build/radiosity-feed -r "$3" -s "$SHOTS" --no-subdivide \
+      "$1" -v -j 1 --queue 30 --worker-cmd build/radiosity-feed -r "$3" -s "$SHOTS" --no-subdivide \
         -o "$out/run" "scenes/$2.obj" 2>"$out/err" >/dev/null
     else
       "$1" -v -j 1 -r "$3" -s 500 --no-subdivide -o "$out/run" "scenes/$2.obj" 2>"$out/err" >/dev/null
