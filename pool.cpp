@@ -168,17 +168,20 @@ void WorkerPool::AddSource(std::unique_ptr<WorkerSource> source) {
 void WorkerPool::Unwatch(int w) {
   const int fd = workers_[w].watched_fd;
   workers_[w].watched_fd = -1;
+  workers_[w].want = 0;
   auto it = watched_.find(fd);
   if (it == watched_.end()) return;
   std::vector<int>& ws = it->second.workers;
   ws.erase(std::remove(ws.begin(), ws.end(), w), ws.end());
-  if (!ws.empty()) return;
+  if (!ws.empty()) {  // what the fd is watched for may shrink
+    dirty_.push_back(fd);
+    return;
+  }
   if (it->second.events) ::epoll_ctl(epoll_, EPOLL_CTL_DEL, fd, nullptr);
   watched_.erase(it);
 }
 
 void WorkerPool::Watch(std::vector<WorkerEvent>* events) {
-  for (auto& [fd, wd] : watched_) wd.want = 0;
   for (size_t w = 0; w < workers_.size(); ++w) {
     Worker& wk = workers_[w];
     if (wk.state == State::kLost) continue;
@@ -188,15 +191,22 @@ void WorkerPool::Watch(std::vector<WorkerEvent>* events) {
       watched_[fd].workers.push_back(int(w));
       wk.watched_fd = fd;
     }
-    Watched& wd = watched_[fd];
-    // EPOLLIN, EPOLLOUT are POLLIN, POLLOUT.
-    wd.want |= uint32_t(uint16_t(wk.conn->Events(wk.Writing(scene_frame_.size()))));
+    // Always for input: epoll, as poll(2), reports the end of the stream
+    // and errors with it. EPOLLIN, EPOLLOUT are POLLIN, POLLOUT.
+    const uint32_t want =
+        EPOLLIN | uint16_t(wk.conn->Events(wk.Writing(scene_frame_.size())));
+    if (want != wk.want) {
+      wk.want = want;
+      dirty_.push_back(fd);
+    }
   }
   unwatchable_.clear();
-  for (auto& [fd, wd] : watched_) {
-    // Always for input: epoll, as poll(2), reports the end of the stream
-    // and errors with it.
-    const uint32_t want = wd.want | EPOLLIN;
+  for (int fd : dirty_) {
+    auto it = watched_.find(fd);
+    if (it == watched_.end()) continue;
+    Watched& wd = it->second;
+    uint32_t want = 0;
+    for (int w : wd.workers) want |= workers_[w].want;
     if (want == wd.events) continue;
     epoll_event ev{};
     ev.events = want;
@@ -207,6 +217,7 @@ void WorkerPool::Watch(std::vector<WorkerEvent>* events) {
     }
     wd.events = want;
   }
+  dirty_.clear();
   // A connection that cannot be watched (its fd closed under it) would
   // never be heard again.
   for (auto [fd, err] : unwatchable_) {
@@ -420,8 +431,8 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
     auto it = watched_.find(int(tag));
     if (it == watched_.end()) continue;  // its last worker was lost meanwhile
     // A copy: a worker lost here leaves the list.
-    const std::vector<int> ws = it->second.workers;
-    for (int w : ws) {
+    hear_.assign(it->second.workers.begin(), it->second.workers.end());
+    for (int w : hear_) {
       if (got & EPOLLOUT) Flush(w, events);
       if (workers_[w].state != State::kLost && (got & (EPOLLIN | EPOLLHUP | EPOLLERR)))
         Receive(w, events);

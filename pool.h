@@ -138,6 +138,7 @@ class WorkerPool : public Transport {
     long owed = 0;
     double progress = 0;
     int watched_fd = -1;  // the fd it is watched under (Watch)
+    uint32_t want = 0;    // and its part of what that fd is watched for
   };
   // ended: the worker closed its end (so it is exiting: wait for its
   // status); otherwise it is killed.
@@ -150,8 +151,8 @@ class WorkerPool : public Transport {
   void Queue(int w, double now);
   double Clk() const;  // seconds since the pool was made
   // Registers what each fd is to be watched for (the union of its
-  // workers' Events()), changing the epoll set only where that changed;
-  // loses the workers of an fd that cannot be watched.
+  // workers' Events()), changing the epoll set only where a worker's
+  // changed; loses the workers of an fd that cannot be watched.
   void Watch(std::vector<WorkerEvent>* events);
   void Unwatch(int w);  // before the worker's Conn is closed
 
@@ -169,13 +170,14 @@ class WorkerPool : public Transport {
   struct Watched {
     std::vector<int> workers;
     uint32_t events = 0;  // registered (0: not yet added)
-    uint32_t want = 0;    // this Poll's
   };
   int epoll_ = -1;
   std::unordered_map<int, Watched> watched_;  // by fd
   std::vector<epoll_event> fired_;            // epoll_wait's
   std::vector<int> buffered_;                 // workers with bytes read for them
   std::vector<std::pair<int, int>> unwatchable_;  // fd, errno (Watch)
+  std::vector<int> dirty_;  // fds whose workers' events changed (Watch)
+  std::vector<int> hear_;   // the workers of an fd that fired (Poll)
   uint64_t sent_ = 0, received_ = 0;
   double epoch_;
   double joined_at_ = -1;  // Clk() when the first worker joined
