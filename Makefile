@@ -58,6 +58,10 @@ $(B)/radiosity-waves: $(B)/bench/waves.o $(LIB_OBJS)
 $(B)/radiosity-master: $(B)/bench/master.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
+# A worker that answers at once (bench/feed.sh): the master at a cluster's rate.
+$(B)/radiosity-feed: $(B)/bench/feed.o $(LIB_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
 $(B)/radiosity-cluster: $(B)/bench/cluster.o $(LIB_OBJS) $(SIM_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
@@ -145,14 +149,14 @@ demo: deps
 
 bench: deps
 	@$(MAKE) --no-print-directory radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
-	  $(B)/radiosity-waves $(B)/radiosity-column $(B)/radiosity-master $(B)/radiosity-cluster $(B)/radiosity-startup $(B)/scenegen
+	  $(B)/radiosity-waves $(B)/radiosity-column $(B)/radiosity-master $(B)/radiosity-cluster $(B)/radiosity-startup $(B)/radiosity-feed $(B)/scenegen
 	@sh bench/run.sh
 
 # The paper's measurements with this machine's cores, written up as
 # bench/results/report.md (half an hour or more, not yet timed with parts 5-8; run it on an idle machine).
 report: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
-	  $(B)/radiosity-waves $(B)/radiosity-column $(B)/radiosity-master $(B)/radiosity-cluster $(B)/radiosity-startup \
+	  $(B)/radiosity-waves $(B)/radiosity-column $(B)/radiosity-master $(B)/radiosity-cluster $(B)/radiosity-startup $(B)/radiosity-feed \
 	  $(B)/radiosity-ffbytes $(B)/scenegen
 	@sh bench/report
 

@@ -7,6 +7,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <sys/epoll.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -127,11 +128,16 @@ WorkerPool::WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh,
                        const PoolOptions& opts, Clock* clock)
     : mesh_(mesh), base_elements_(mesh.elems.size()), mesh_hash_(MeshHash(mesh)),
       opts_(opts), clock_(clock), epoch_(clock->Now()) {
+  epoll_ = ::epoll_create1(EPOLL_CLOEXEC);
+  CHECK(epoll_ >= 0);  // only out of memory or descriptors: nothing to run on
   proto::EncodeHello(proto::Hello(), &scene_frame_);
   proto::EncodeScene(setup, &scene_frame_);
 }
 
-WorkerPool::~WorkerPool() { Shutdown(); }
+WorkerPool::~WorkerPool() {
+  Shutdown();
+  if (epoll_ >= 0) ::close(epoll_);
+}
 
 double WorkerPool::Clk() const { return clock_->Now() - epoch_; }
 
@@ -148,8 +154,78 @@ void WorkerPool::Add(std::unique_ptr<Conn> conn, const std::string& name) {
   workers_.push_back(std::move(w));
 }
 
+// Sources are told from workers by the top bit of the event's data.
+constexpr uint64_t kSourceBit = uint64_t{1} << 63;
+
 void WorkerPool::AddSource(std::unique_ptr<WorkerSource> source) {
+  epoll_event ev{};
+  ev.events = EPOLLIN;
+  ev.data.u64 = kSourceBit | sources_.size();
+  CHECK(::epoll_ctl(epoll_, EPOLL_CTL_ADD, source->fd(), &ev) == 0);
   sources_.push_back(std::move(source));
+}
+
+void WorkerPool::Unwatch(int w) {
+  const int fd = workers_[w].watched_fd;
+  workers_[w].watched_fd = -1;
+  workers_[w].want = 0;
+  auto it = watched_.find(fd);
+  if (it == watched_.end()) return;
+  std::vector<int>& ws = it->second.workers;
+  ws.erase(std::remove(ws.begin(), ws.end(), w), ws.end());
+  if (!ws.empty()) {  // what the fd is watched for may shrink
+    dirty_.push_back(fd);
+    return;
+  }
+  if (it->second.events) ::epoll_ctl(epoll_, EPOLL_CTL_DEL, fd, nullptr);
+  watched_.erase(it);
+}
+
+void WorkerPool::Watch(std::vector<WorkerEvent>* events) {
+  for (size_t w = 0; w < workers_.size(); ++w) {
+    Worker& wk = workers_[w];
+    if (wk.state == State::kLost) continue;
+    const int fd = wk.conn->fd();
+    if (wk.watched_fd != fd) {
+      Unwatch(int(w));
+      watched_[fd].workers.push_back(int(w));
+      wk.watched_fd = fd;
+    }
+    // Always for input: epoll, as poll(2), reports the end of the stream
+    // and errors with it. EPOLLIN, EPOLLOUT are POLLIN, POLLOUT.
+    const uint32_t want =
+        EPOLLIN | uint16_t(wk.conn->Events(wk.Writing(scene_frame_.size())));
+    if (want != wk.want) {
+      wk.want = want;
+      dirty_.push_back(fd);
+    }
+  }
+  unwatchable_.clear();
+  for (int fd : dirty_) {
+    auto it = watched_.find(fd);
+    if (it == watched_.end()) continue;
+    Watched& wd = it->second;
+    uint32_t want = 0;
+    for (int w : wd.workers) want |= workers_[w].want;
+    if (want == wd.events) continue;
+    epoll_event ev{};
+    ev.events = want;
+    ev.data.u64 = uint64_t(uint32_t(fd));
+    if (::epoll_ctl(epoll_, wd.events ? EPOLL_CTL_MOD : EPOLL_CTL_ADD, fd, &ev) != 0) {
+      unwatchable_.push_back({fd, errno});
+      continue;
+    }
+    wd.events = want;
+  }
+  dirty_.clear();
+  // A connection that cannot be watched (its fd closed under it) would
+  // never be heard again.
+  for (auto [fd, err] : unwatchable_) {
+    auto it = watched_.find(fd);
+    if (it == watched_.end()) continue;
+    const std::vector<int> ws = it->second.workers;
+    for (int w : ws) Lose(w, std::string("cannot watch its connection: ") + std::strerror(err), events);
+  }
 }
 
 int WorkerPool::Starting() const {
@@ -177,6 +253,7 @@ void WorkerPool::Lose(int w, const std::string& why, std::vector<WorkerEvent>* e
   Worker& wk = workers_[w];
   if (wk.state == State::kLost) return;
   wk.state = State::kLost;
+  Unwatch(w);
   std::string how = wk.conn->Close(!ended);
   events->push_back({WorkerEvent::kLost, w, {}, how.empty() ? why : why + ", " + how});
   wk.out.clear();
@@ -308,6 +385,12 @@ void WorkerPool::Receive(int w, std::vector<WorkerEvent>* events) {
   }
 }
 
+void WorkerPool::Send(std::vector<WorkerEvent>* events) {
+  for (size_t w = 0; w < workers_.size(); ++w)
+    if (workers_[w].state != State::kLost && workers_[w].Writing(scene_frame_.size()))
+      Flush(int(w), events);
+}
+
 void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
   const size_t before = events->size();
   double now = Clk();
@@ -322,38 +405,38 @@ void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
     }
     Flush(int(w), events);
   }
-  // One pollfd per worker, even where workers share an fd (the channels
-  // of one ssh session): poll reports it to each, and each reads its own
-  // channel. What one channel's read brought in for another is Buffered().
   // Events() may read the socket (ssh), Buffered() does not: all of the
   // first before any of the second, so that nothing read for one worker
-  // is left unseen while poll sleeps.
-  std::vector<pollfd> fds;
-  std::vector<int> who;
-  std::vector<int> buffered;
-  for (size_t w = 0; w < workers_.size(); ++w) {
-    Worker& wk = workers_[w];
-    if (wk.state == State::kLost) continue;
-    fds.push_back({wk.conn->fd(), wk.conn->Events(wk.Writing(scene_frame_.size())), 0});
-    who.push_back(int(w));
-  }
-  const size_t nworkers = fds.size();
-  for (int w : who)
-    if (workers_[w].conn->Buffered()) buffered.push_back(w);
-  for (const auto& s : sources_) fds.push_back({s->fd(), POLLIN, 0});
-  if (events->size() > before || !buffered.empty()) timeout = 0;
+  // (a sibling channel of one ssh session) is left unseen while
+  // epoll_wait sleeps.
+  Watch(events);
+  buffered_.clear();
+  for (size_t w = 0; w < workers_.size(); ++w)
+    if (workers_[w].state != State::kLost && workers_[w].conn->Buffered())
+      buffered_.push_back(int(w));
+  if (events->size() > before || !buffered_.empty()) timeout = 0;
   // Wake for heartbeats and deadlines even when nothing arrives.
   const double wait = std::min(timeout, opts_.heartbeat_s / 2);
-  int n = ::poll(fds.data(), fds.size(), int(std::max(0.0, wait) * 1000));
-  for (int w : buffered) Receive(w, events);
-  if (n > 0) {
-    for (size_t i = 0; i < nworkers; ++i) {
-      if (fds[i].revents & POLLOUT) Flush(who[i], events);
-      if (workers_[who[i]].state != State::kLost && (fds[i].revents & (POLLIN | POLLHUP | POLLERR)))
-        Receive(who[i], events);
+  fired_.resize(std::max<size_t>(16, watched_.size() + sources_.size()));
+  int n = ::epoll_wait(epoll_, fired_.data(), int(fired_.size()),
+                       int(std::max(0.0, wait) * 1000));
+  for (int w : buffered_) Receive(w, events);
+  for (int i = 0; i < n; ++i) {
+    const uint64_t tag = fired_[size_t(i)].data.u64;
+    const uint32_t got = fired_[size_t(i)].events;
+    if (tag & kSourceBit) {
+      sources_[size_t(tag & ~kSourceBit)]->Take(this);
+      continue;
     }
-    for (size_t i = nworkers; i < fds.size(); ++i)
-      if (fds[i].revents) sources_[i - nworkers]->Take(this);
+    auto it = watched_.find(int(tag));
+    if (it == watched_.end()) continue;  // its last worker was lost meanwhile
+    // A copy: a worker lost here leaves the list.
+    hear_.assign(it->second.workers.begin(), it->second.workers.end());
+    for (int w : hear_) {
+      if (got & EPOLLOUT) Flush(w, events);
+      if (workers_[w].state != State::kLost && (got & (EPOLLIN | EPOLLHUP | EPOLLERR)))
+        Receive(w, events);
+    }
   }
   // Silence and progress are judged after reading, so that a heartbeat or
   // a column that came while the master was busy elsewhere (a picture, a
@@ -386,6 +469,7 @@ void WorkerPool::Shutdown() {
     proto::EncodeBye(&wk.out);
     Flush(int(w), &ignored);
     wk.state = State::kLost;
+    Unwatch(int(w));
     wk.conn->Close(false);
   }
 }

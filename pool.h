@@ -1,6 +1,6 @@
 // The local pool: worker processes behind byte streams (Conn), started
 // here (SpawnLocal), connected back or over ssh (a WorkerSource), driven by
-// one poll(2) loop that speaks the protocol of doc/protocol.txt with
+// one epoll(7) loop that speaks the protocol of doc/protocol.txt with
 // heartbeats both ways and deadlines.
 #ifndef RADIOSITY_POOL_H
 #define RADIOSITY_POOL_H
@@ -8,7 +8,9 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <sys/epoll.h>
 #include <sys/types.h>
+#include <unordered_map>
 #include <vector>
 
 #include "clock.h"
@@ -80,7 +82,7 @@ class WorkerSource {
   virtual void Joined() {}
 };
 
-// Workers behind Conns, driven by poll(2) with non-blocking I/O: the
+// Workers behind Conns, driven by epoll(7) with non-blocking I/O: the
 // protocol of doc/protocol.txt, heartbeats both ways and deadlines.
 class WorkerPool : public Transport {
  public:
@@ -106,6 +108,7 @@ class WorkerPool : public Transport {
   void Assign(int w, const proto::Assignment& a) override;
   void Divide(const std::vector<int32_t>& elems) override;
   void Poll(double timeout, std::vector<WorkerEvent>* events) override;
+  void Send(std::vector<WorkerEvent>* events) override;
   // The run's clock: 0 until the first worker joins, so that waiting for
   // workers (connect-back, ssh set-up, start-up) does not count against
   // -t; the deadlines go by the pool's own clock.
@@ -134,6 +137,8 @@ class WorkerPool : public Transport {
     // worker lives, columns that it works.
     long owed = 0;
     double progress = 0;
+    int watched_fd = -1;  // the fd it is watched under (Watch)
+    uint32_t want = 0;    // and its part of what that fd is watched for
   };
   // ended: the worker closed its end (so it is exiting: wait for its
   // status); otherwise it is killed.
@@ -145,6 +150,11 @@ class WorkerPool : public Transport {
               std::vector<WorkerEvent>* events, std::string* why);
   void Queue(int w, double now);
   double Clk() const;  // seconds since the pool was made
+  // Registers what each fd is to be watched for (the union of its
+  // workers' Events()), changing the epoll set only where a worker's
+  // changed; loses the workers of an fd that cannot be watched.
+  void Watch(std::vector<WorkerEvent>* events);
+  void Unwatch(int w);  // before the worker's Conn is closed
 
   const Mesh& mesh_;
   std::string scene_frame_;  // encoded once, sent to every worker
@@ -154,6 +164,20 @@ class WorkerPool : public Transport {
   Clock* clock_;
   std::vector<Worker> workers_;
   std::vector<std::unique_ptr<WorkerSource>> sources_;
+  // epoll rather than poll(2): poll costs 8 us for 100 idle sockets here
+  // (0.2 us for epoll_wait), and a master feeding a cluster polls often.
+  // An fd may carry several workers (the channels of one ssh session).
+  struct Watched {
+    std::vector<int> workers;
+    uint32_t events = 0;  // registered (0: not yet added)
+  };
+  int epoll_ = -1;
+  std::unordered_map<int, Watched> watched_;  // by fd
+  std::vector<epoll_event> fired_;            // epoll_wait's
+  std::vector<int> buffered_;                 // workers with bytes read for them
+  std::vector<std::pair<int, int>> unwatchable_;  // fd, errno (Watch)
+  std::vector<int> dirty_;  // fds whose workers' events changed (Watch)
+  std::vector<int> hear_;   // the workers of an fd that fired (Poll)
   uint64_t sent_ = 0, received_ = 0;
   double epoch_;
   double joined_at_ = -1;  // Clk() when the first worker joined

@@ -216,11 +216,24 @@ void SimTransport::Advance(double* master_cpu, double until, bool stop_on_arriva
   }
 }
 
-void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
-  // The master has worked since the last Poll: the world moves on meanwhile.
+// The master has worked since the last Poll or Send: the world moves on
+// meanwhile.
+void SimTransport::Charge() {
   double cpu = opts_.master_cost_s >= 0 ? opts_.master_cost_s : ThreadCpuSeconds() - mark_;
   master_s_ += cpu;
   Advance(&cpu, 0, false);
+}
+
+// A turn of the master that does not read: charged as one; what arrived
+// waits in the inbox for the next Poll.
+void SimTransport::Send(std::vector<WorkerEvent>*) {
+  Charge();
+  mark_ = ThreadCpuSeconds();
+  wall_mark_ = MonotonicSeconds();
+}
+
+void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
+  Charge();
   if (inbox_.empty()) Advance(nullptr, now_ + timeout, true);
   // From here on it is the master's work again: decoding what arrived.
   mark_ = ThreadCpuSeconds();

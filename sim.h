@@ -11,8 +11,9 @@
 //    speed factor, and times any slowdown active while it computes.
 //  * The master is charged its own measured time: everything its thread
 //    does between the return of one Poll() and the start of the next, plus
-//    the decoding of the columns Poll() hands it. Now() includes what is
-//    used so far, so the master's notion of time runs on while it works.
+//    the decoding of the columns Poll() hands it (a Send() between Polls
+//    charges what came before it). Now() includes what is used so far, so
+//    the master's notion of time runs on while it works.
 //    The charge is the thread's CPU time, read twice per Poll(), so that a
 //    moment the master's thread was preempted is not charged; Now() in
 //    between runs on the monotonic clock, which costs no system call
@@ -76,7 +77,8 @@ struct SimOptions {
   size_t scene_bytes = 0;
   int host_cores = 0;         // > 0: everyone shares one machine of this many cores
   // >= 0: charge this instead of the measurements (tests): seconds per
-  // column, and seconds of master work per Poll() cycle.
+  // column, and seconds of master work per turn of its loop (each Poll()
+  // and Send() cycle).
   double column_cost_s = -1;
   double master_cost_s = -1;
   // The columns' parameters, as RunOptions has them.
@@ -94,6 +96,7 @@ class SimTransport : public Transport {
   void Assign(int w, const proto::Assignment& a) override;
   void Divide(const std::vector<int32_t>& elems) override;
   void Poll(double timeout, std::vector<WorkerEvent>* events) override;
+  void Send(std::vector<WorkerEvent>* events) override;
   double Now() override;
   uint64_t BytesSent() const override { return sent_; }
   uint64_t BytesReceived() const override { return received_; }
@@ -140,6 +143,7 @@ class SimTransport : public Transport {
   // Runs the world forward: while the master works `*master_cpu` seconds
   // (master_cpu non-null), else until `until` or, with stop_on_arrival,
   // the first frame at the master.
+  void Charge();  // the master's work since the last Poll or Send
   void Advance(double* master_cpu, double until, bool stop_on_arrival);
   void Process(Event& ev);
   void Start(int w);

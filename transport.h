@@ -43,6 +43,11 @@ class Transport {
   virtual void Divide(const std::vector<int32_t>& elems) = 0;  // to all workers
   // Waits until there are events or `timeout` seconds have passed; appends.
   virtual void Poll(double timeout, std::vector<WorkerEvent>* events) = 0;
+  // Sends what Assign and Divide queued, without reading or waiting (a
+  // worker lost in sending is reported in `events`): between Polls, while
+  // the master has columns to shoot. Transports that deliver at Assign
+  // (in this process, simulated) have nothing to do.
+  virtual void Send(std::vector<WorkerEvent>* /*events*/) {}
   // Seconds on the transport's clock (wall time; virtual in the simulation).
   virtual double Now() = 0;
   virtual uint64_t BytesSent() const { return 0; }

@@ -87,7 +87,8 @@ class Heartbeat {
 
 class Worker {
  public:
-  Worker(int in_fd, int out_fd) : in_fd_(in_fd), out_(out_fd) {}
+  Worker(int in_fd, int out_fd, ColumnFn column, bool spin)
+      : in_fd_(in_fd), out_(out_fd), column_(std::move(column)), spin_(spin) {}
   int Run(std::string* err);
 
  private:
@@ -107,6 +108,8 @@ class Worker {
 
   int in_fd_;
   Sender out_;
+  ColumnFn column_;
+  bool spin_;
   proto::FrameReader in_;
   Mesh mesh_;
   // Made once the scene is in (its resolution comes with it); a member so
@@ -288,7 +291,7 @@ int Worker::Run(std::string* err) {
   for (;;) {
     // Take in everything that has arrived; wait only when idle.
     for (;;) {
-      const double wait = todo_.empty() ? 1.0 : 0.0;
+      const double wait = todo_.empty() && !spin_ ? 1.0 : 0.0;
       got = Read(wait, &type, &payload, &why);
       if (got == kEnd) return kExitOk;
       if (got == kBad) return Fail(why, err);
@@ -308,8 +311,11 @@ int Worker::Run(std::string* err) {
     col.wait_s = MonotonicSeconds() - todo_.front().received;
     todo_.pop_front();
     const double t0 = ThreadCpuSeconds();
-    ShotColumn(hemicube_.get(), mesh_, a.patch, a.Group(), a.k, setup.rotate, setup.seed,
-               &col.ff);
+    if (column_)
+      column_(hemicube_.get(), mesh_, a, setup.rotate, setup.seed, &col.ff);
+    else
+      ShotColumn(hemicube_.get(), mesh_, a.patch, a.Group(), a.k, setup.rotate, setup.seed,
+                 &col.ff);
     col.compute_s = ThreadCpuSeconds() - t0;
     frame.clear();
     proto::EncodeColumn(col, &frame);
@@ -319,8 +325,8 @@ int Worker::Run(std::string* err) {
 
 }  // namespace
 
-int RunWorker(int in_fd, int out_fd, std::string* err) {
+int RunWorker(int in_fd, int out_fd, std::string* err, ColumnFn column, bool spin) {
   MapLargeArrays();
-  Worker w(in_fd, out_fd);
+  Worker w(in_fd, out_fd, std::move(column), spin);
   return w.Run(err);
 }

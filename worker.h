@@ -6,10 +6,23 @@
 #ifndef RADIOSITY_WORKER_H
 #define RADIOSITY_WORKER_H
 
+#include <functional>
 #include <string>
+#include <vector>
+
+#include "hemicube.h"
+#include "protocol.h"
+
+// How a worker computes one assigned column: ShotColumn, unless a
+// benchmark feeds the master faster than hemicubes can (bench/feed.cpp).
+using ColumnFn = std::function<void(Hemicube*, const Mesh&, const proto::Assignment&,
+                                    bool rotate, unsigned seed, std::vector<FormFactor>*)>;
 
 // Returns the process exit status: 0 after Bye or end of stream, 1 on a
 // protocol error (*err says what; the master was also sent an Error).
-int RunWorker(int in_fd, int out_fd, std::string* err);
+// `spin`: never sleep waiting for work (the benchmark's stand-in for many
+// busy workers, whose sockets the master's sends never wake).
+int RunWorker(int in_fd, int out_fd, std::string* err, ColumnFn column = nullptr,
+              bool spin = false);
 
 #endif

@@ -152,6 +152,49 @@ TEST_F(PoolTest, JoinsAfterHelloAndReadyThenTradesWorkForColumns) {
   EXPECT_GT(pool_.BytesSent(), 0u);
 }
 
+// Many workers on one epoll set: each one's column is heard, and a
+// worker lost leaves it so that a newcomer on the same fd number (the
+// lowest free one: the lost worker's) is heard in its place.
+TEST_F(PoolTest, AHundredWorkersAreHeardAndALostOnesFdServesANewcomer) {
+  std::vector<Peer> peers;
+  for (int i = 0; i < 100; ++i) peers.push_back(Joined());
+  const int patches = int(mesh_.patches.size());
+  std::vector<WorkerEvent> ev;  // what the polls bring, from the first
+  auto trade = [&](int w, Peer* p) {
+    pool_.Assign(w, {w % patches, 0});
+    pool_.Poll(0, &ev);  // writes the work frame
+    Msg type;
+    std::string payload;
+    ASSERT_TRUE(p->Next(&type, &payload));
+    ASSERT_EQ(type, Msg::kWork);
+    proto::Column c;
+    c.patch = w % patches;
+    c.ff = {{1, 0.25f}};
+    std::string frame;
+    proto::EncodeColumn(c, &frame);
+    p->Send(frame);
+  };
+  for (int w = 0; w < 100; ++w) trade(w, &peers[size_t(w)]);
+  std::vector<int> heard(100, 0);
+  for (int i = 0; i < 100 && ev.size() < 100; ++i) pool_.Poll(0, &ev);
+  ASSERT_EQ(ev.size(), 100u);
+  for (const WorkerEvent& e : ev) {
+    ASSERT_EQ(e.kind, WorkerEvent::kColumn);
+    ++heard[size_t(e.worker)];
+  }
+  EXPECT_EQ(std::count(heard.begin(), heard.end(), 1), 100);
+
+  peers[50].Close();
+  EXPECT_TRUE(Has(LostWhy(), "closed the connection"));
+  Peer late = Joined();
+  ev.clear();
+  trade(100, &late);
+  for (int i = 0; i < 4 && ev.empty(); ++i) pool_.Poll(0, &ev);
+  ASSERT_EQ(ev.size(), 1u);
+  EXPECT_EQ(ev[0].kind, WorkerEvent::kColumn);
+  EXPECT_EQ(ev[0].worker, 100);
+}
+
 TEST_F(PoolTest, HelloDeadline) {
   Peer p = Connect();
   ReadSetup(&p);

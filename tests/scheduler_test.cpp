@@ -30,7 +30,8 @@ class FakeTransport : public Transport {
     max_outstanding_ = std::max(max_outstanding_, queue_[w].size());
   }
   void Divide(const std::vector<int32_t>&) override {}
-  double Now() override { return now_; }
+  double Now() override { return now_ += now_step_; }
+  void Send(std::vector<WorkerEvent>*) override { ++sends_; }
 
   // Each Poll: the first joins everyone; later ones answer one assignment
   // of each worker in turn (round robin), as workers of equal speed would.
@@ -54,18 +55,29 @@ class FakeTransport : public Transport {
     for (int i = 0; i < Workers(); ++i) {
       const int w = (next_ + i) % Workers();
       if (lost_.count(w) || silent_.count(w) || queue_[w].empty()) continue;
+      if (answer_all_) {  // and the rest at once: workers far quicker than the master
+        for (const proto::Assignment& a : queue_[w]) events->push_back(Answer(a, w));
+        queue_[w].clear();
+        continue;
+      }
       next_ = w + 1;
       const proto::Assignment a = queue_[w].front();
       queue_[w].erase(queue_[w].begin());
-      WorkerEvent ev{WorkerEvent::kColumn, w, {}, ""};
-      ev.column.patch = a.patch;
-      ev.column.k = a.k;
-      ev.column.compute_s = 1e-3;
-      hemicube_.Column(mesh_, a.patch, a.Group(), 0.0, &ev.column.ff);
+      const WorkerEvent ev = Answer(a, w);
       events->push_back(ev);
       if (duplicate_at_ == polls_) events->push_back(ev);  // a late copy
       return;
     }
+  }
+
+  WorkerEvent Answer(const proto::Assignment& a, int w) {
+    WorkerEvent ev{WorkerEvent::kColumn, w, {}, ""};
+    ev.column.patch = a.patch;
+    ev.column.k = a.k;
+    // Quick workers say so: their queues deepen to cover the round trip.
+    ev.column.compute_s = answer_all_ ? 1e-6 : 1e-3;
+    hemicube_.Column(mesh_, a.patch, a.Group(), 0.0, &ev.column.ff);
+    return ev;
   }
 
   const Mesh& mesh_;
@@ -78,10 +90,12 @@ class FakeTransport : public Transport {
   std::set<int> silent_;                  // workers that never answer (SIGSTOP)
   long duplicate_at_ = -1;
   bool never_join_ = false, joined_ = false, lost_all_ = false;
+  bool answer_all_ = false;  // each Poll answers every assignment
   size_t max_outstanding_ = 0;
-  long polls_ = 0;
+  long polls_ = 0, sends_ = 0;
   int next_ = 0;
   double now_ = 0;
+  double now_step_ = 0;  // Now() moves on this much at every call
 };
 
 // A closed box whose six walls are lights of different strength, so that
@@ -209,6 +223,37 @@ TEST(Scheduler, RecycledColumnStorageGetsTheSameColumn) {
     EXPECT_EQ(ev[2].column.ff[i].elem, fresh[i].elem);
     EXPECT_EQ(ev[2].column.ff[i].f, fresh[i].f);
   }
+}
+
+// With more columns at hand than the one it shoots next, the master only
+// sends work between Polls, until kHearEvery (100 us) has passed since
+// the last: the workers here answer everything at each Poll, so a Poll
+// brings up to a queue's worth. On a clock that moves 1 ms a reading it
+// hears them every turn.
+TEST(Scheduler, ColumnsAtHandAreShotBeforeWorkersAreHeardAgain) {
+  Scene s = Box(1.0, {glm::dvec3(0.6)}, {glm::dvec3(1.0)});
+  Mesh m = MakeMesh(s);
+  RunOptions o = Opts();
+  o.queue = 8;
+  o.max_shots = 200;
+  auto run = [&](double step, long* polls, long* sends) {
+    FakeTransport t(m, 1);
+    t.answer_all_ = true;
+    t.now_step_ = step;
+    Solver solver(m, true);
+    RunResult r = RunMaster(&m, o, &solver, nullptr, &t, nullptr, nullptr);
+    EXPECT_EQ(r.shots, 200);
+    EXPECT_EQ(r.columns, r.shots);
+    *polls = t.polls_;
+    *sends = t.sends_;
+  };
+  long polls, sends;
+  run(0.0, &polls, &sends);
+  EXPECT_LT(polls, 200 / 3);
+  EXPECT_GT(sends, 200 / 2);
+  run(1e-3, &polls, &sends);
+  EXPECT_GE(polls, 200);
+  EXPECT_EQ(sends, 0);
 }
 
 // The same answer as the sequential run, and every assignment shot once.
