@@ -3,6 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include "check.h"
 #include "clock.h"
 
@@ -234,7 +239,15 @@ void SimTransport::Send(std::vector<WorkerEvent>*) {
 
 void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
   Charge();
-  if (inbox_.empty()) Advance(nullptr, now_ + timeout, true);
+  if (inbox_.empty()) {
+    const double slept_from = now_;
+    Advance(nullptr, now_ + timeout, true);
+    if (opts_.wakeup_s > 0 && now_ > slept_from && !inbox_.empty()) {
+      double wake = opts_.wakeup_s;
+      master_s_ += wake;
+      Advance(&wake, 0, false);
+    }
+  }
   // From here on it is the master's work again: decoding what arrived.
   mark_ = ThreadCpuSeconds();
   wall_mark_ = MonotonicSeconds();
@@ -269,4 +282,36 @@ void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
     }
   }
   inbox_.clear();
+}
+
+double MeasureWakeup() {
+  int sv[2];
+  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0) return 0;
+  constexpr int kRounds = 3, kWakes = 200;
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(sv[0]);
+    for (int i = 0; i < kRounds * kWakes; ++i) {
+      const double until = MonotonicSeconds() + 300e-6;
+      while (MonotonicSeconds() < until) {
+      }
+      if (::write(sv[1], "x", 1) != 1) ::_exit(1);
+    }
+    ::_exit(0);
+  }
+  ::close(sv[1]);
+  double best = HUGE_VAL;
+  for (int r = 0; r < kRounds && pid > 0; ++r) {
+    const double c0 = ThreadCpuSeconds();
+    int woken = 0;
+    for (; woken < kWakes; ++woken) {
+      pollfd p{sv[0], POLLIN, 0};
+      char b;
+      if (::poll(&p, 1, 1000) != 1 || ::read(sv[0], &b, 1) != 1) break;
+    }
+    if (woken == kWakes) best = std::min(best, (ThreadCpuSeconds() - c0) / kWakes);
+  }
+  ::close(sv[0]);
+  if (pid > 0) ::waitpid(pid, nullptr, 0);
+  return std::isfinite(best) ? best : 0;
 }

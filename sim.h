@@ -81,11 +81,21 @@ struct SimOptions {
   // and Send() cycle).
   double column_cost_s = -1;
   double master_cost_s = -1;
+  // CPU seconds the master pays when, having nothing to do, it slept in
+  // Poll and an arrival woke it (the kernel's wake-up path, which a real
+  // run pays and the simulated master, never sleeping, does not):
+  // MeasureWakeup() on this machine, or 0.
+  double wakeup_s = 0;
   // The columns' parameters, as RunOptions has them.
   int resolution = 256;
   bool rotate = true;
   unsigned seed = 1;
 };
+
+// This machine's CPU cost of one wake-up: a thread blocked in poll(2) on
+// a socket, woken by another process's write every 300 us, in thread CPU
+// seconds per wake-up (the least of 3 rounds of 200).
+double MeasureWakeup();
 
 class SimTransport : public Transport {
  public:

@@ -194,6 +194,28 @@ TEST(Sim, TheMasterIsChargedItsWork) {
   EXPECT_NEAR(t.MasterSeconds(), r.seconds, 2 * kCost);
 }
 
+// A master that waits for its one worker sleeps before each column and
+// pays its wake-up then; a master busy with the columns of many does not
+// sleep, so it pays none.
+TEST(Sim, AMasterThatSleptPaysItsWakeUp) {
+  Mesh m = BoxMesh();
+  auto master = [&](int workers, double cost, double wake) {
+    SimOptions o = Fixed(workers);
+    o.master_cost_s = cost;
+    o.wakeup_s = wake;
+    SimTransport t(m, o);
+    RunResult r = Simulate(m, Shots(100), &t);
+    EXPECT_EQ(r.shots, 100);
+    return t.MasterSeconds();
+  };
+  const double wake = 0.1 * kCost;
+  const double extra = master(1, 0, wake) - master(1, 0, 0);
+  EXPECT_GE(extra, 99 * wake);   // woken by each column, the first one too
+  EXPECT_LE(extra, 101 * wake);
+  // 8 workers, the master the bottleneck: no column finds it asleep.
+  EXPECT_NEAR(master(8, 0.5 * kCost, wake), master(8, 0.5 * kCost, 0), 2 * wake);
+}
+
 // A master slower than its workers stops feeding them: the columns it has
 // not shot count against their queues, so they do not pile up (which
 // would shoot patches in arrival order, not by power).
