@@ -18,7 +18,8 @@
 //    moment the master's thread was preempted is not charged; Now() in
 //    between runs on the monotonic clock, which costs no system call
 //    (the CPU clock's costs 1.5 us here, and the master asks the time
-//    several times per shot).
+//    several times per shot). A master that slept in Poll for want of
+//    events also pays `wakeup_s` when one wakes it, as a real one does.
 //  * The master's link is one shared medium that all frames, both ways,
 //    cross one after another (FIFO by the time they are sent): a frame of
 //    B bytes holds it 8B / bandwidth seconds, then arrives `latency` later.
