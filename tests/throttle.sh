@@ -6,7 +6,7 @@
 #  * the run converges to the -j 0 answer within 0.5% per face (as
 #    tests/parallel.sh), both workers joined, none lost;
 #  * the throttled worker was given work; it measured its link (its
-#    columns come at least 5 times further apart than it takes to compute
+#    columns come at least 3 times further apart than it takes to compute
 #    them, as printed with -v); its queue at the end is what those
 #    measurements call for (the round trip over the time between columns,
 #    README, Workers); and it was given patches from below the top
@@ -65,7 +65,7 @@ if run_ok "maze, a worker behind pv -L 200k" "$T/slow" -v -j 2 --worker-cmd "$T/
   if [ "$((cols + back))" -gt 0 ]; then
     pass "throttled worker: given work ($cols columns shot, $back patches taken back)"
   else fail "throttled worker: given no work ($line)"; fi
-  if awk -v x="$column" -v z="$every" 'BEGIN { exit !(x > 0 && z >= 5 * x) }'; then
+  if awk -v x="$column" -v z="$every" 'BEGIN { exit !(x > 0 && z >= 3 * x) }'; then
     pass "throttled worker: its link paces it (a column every $every ms, computed in $column ms)"
   else
     fail "throttled worker: its link not measured (a column every $every ms, computed in $column ms)"
