@@ -273,7 +273,7 @@ RunState Scheduler::State() {
 // worker computes the ones it holds, one per Service() time; on a link
 // slower than the worker's CPU the link paces it, and more than the round
 // trip's worth would only wait in its buffers, held from the other
-// workers. Up to kMaxDepth: a link of 25 ms each way needs 32 in flight
+// workers. Up to kMaxDepth: a link of 25 ms each way needs some 32 in flight
 // to keep a worker of 1.6 ms a column busy (the paper's 10 kept it busy
 // a third of the time). high adds enough prepared patches to refill
 // that pipeline twice, more with many workers (the master then takes
