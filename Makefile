@@ -65,6 +65,9 @@ $(B)/radiosity-feed: $(B)/bench/feed.o $(LIB_OBJS)
 $(B)/radiosity-cluster: $(B)/bench/cluster.o $(LIB_OBJS) $(SIM_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
+$(B)/radiosity-throttle: $(B)/bench/throttle.o $(LIB_OBJS) $(SIM_OBJS)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
 # Bytes per form factor of the column encoding against compressors
 # (liblz4, libzstd: only this benchmark links them).
 $(B)/radiosity-ffbytes: $(B)/bench/ffbytes.o $(LIB_OBJS)
@@ -157,7 +160,7 @@ bench: deps
 report: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) radiosity $(B)/radiosity-bench $(B)/radiosity-parallel \
 	  $(B)/radiosity-waves $(B)/radiosity-column $(B)/radiosity-master $(B)/radiosity-cluster $(B)/radiosity-startup $(B)/radiosity-feed \
-	  $(B)/radiosity-ffbytes $(B)/scenegen
+	  $(B)/radiosity-ffbytes $(B)/radiosity-throttle $(B)/scenegen
 	@sh bench/report
 
 install: radiosity

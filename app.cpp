@@ -453,6 +453,14 @@ void MasterRun::Run() {
                  r.distribute_s, r.receive_s, r.shoot_s, r.wait_s, r.joined, r.lost, r.columns,
                  r.worker_s, r.stale, double(r.bytes_sent) / std::max(1L, r.shots),
                  double(r.bytes_received) / std::max(1L, r.shots));
+  if (opts_.verbosity >= 2)
+    for (const RunResult::Worker& w : r.workers)
+      std::fprintf(stderr,
+                   "radiosity: %s: %ld columns, %ld deferred, %ld taken back; queue %d..%d sent, %d at the "
+                   "end, high watermark up to %d; %.2f ms a column, %.2f ms on the wire, one "
+                   "every %.2f ms\n",
+                   Printable(w.name).c_str(), w.columns, w.deferred, w.reclaimed, w.depth_min, w.depth_max,
+                   w.depth, w.high_max, 1e3 * w.column_s, 1e3 * w.wire_s, 1e3 * w.interval_s);
 }
 
 void MasterRun::WriteOutputs() {

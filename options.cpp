@@ -90,7 +90,7 @@ const char kUsage[] =
     "  -o, --out DIR          where results go (default: out)\n"
     "  -j, --workers N        local worker processes (default: online cores);\n"
     "                         0: the master computes form factors itself\n"
-    "      --queue N          patches queued per worker (default: automatic, 3-10)\n"
+    "      --queue N          patches queued per worker (default: automatic, 3-64)\n"
     "      --timeout SEC      drop a worker silent, or given work and sending no\n"
     "                         column, this long (default 10)\n"
     "      --worker-cmd CMD   start local workers with CMD --worker\n"

@@ -65,6 +65,16 @@ struct Slot {
   int high = 3, low = 2;  // watermarks on Queued()
   long columns = 0;
   int waiting = 0;        // its columns received and not yet shot
+  // What its queue is set from (Scheduler::Measure), in seconds, smoothed
+  // (double: differences of clock readings). 0: not measured yet.
+  double column_s = 0;     // compute time per column
+  double wire_s = 0;       // a column's time on the wire (its work's way
+                           // out, its own way back), not counting a wait
+                           // behind its own earlier columns on a slow link
+  double interval_s = 0;   // between two of its columns while it held more
+  double last_arrival = -1;
+  long retry_at = 0;       // shots: no patch far enough down for it until then
+  RunResult::Worker report;
   size_t Owned() const { return sent.size() + prepared.size(); }
   // What the watermarks count: its columns waiting to be shot too, so
   // that a master slower than its workers stops feeding them. Otherwise
@@ -73,6 +83,12 @@ struct Slot {
   // simulated workers on the room at R 64 once received 1175 columns for
   // 500 shots at 108 us a shot instead of 30.
   size_t Queued() const { return Owned() + size_t(waiting); }
+  // Seconds between its columns as it runs: the slower of its CPU and its
+  // link.
+  double Service() const { return std::max(column_s, interval_s); }
+  // How long a patch sent to it is held: behind a full pipeline, then on
+  // the wire. 0: not measured yet.
+  double Turnaround() const { return column_s > 0 ? wire_s + depth * Service() : 0; }
 };
 
 // The master's parts are timed with the monotonic clock: the thread's CPU
@@ -143,6 +159,8 @@ class Scheduler {
   void Receive();
   bool FallBack();
   void Distribute();
+  void Fill();
+  void Send();
   bool Exhausted();
   void ShootNext();
   void Subdivide();
@@ -160,8 +178,22 @@ class Scheduler {
   }
   bool Pipelined() const { return !t_->Caps().computes_in_poll; }
   void Sizes(Slot* s, int workers) const;
+  void Measure(Slot* s, const Slot::Sent& sent, const proto::Column& c);
+  void Deferrals();
+  void Reclaim();
+  int PatchBelow(long skip);
   void Handle(WorkerEvent& ev);
   void Release(Slot* s);
+  // Its RunResult::Worker into r_ (a worker that joined, once).
+  void Report(Slot* s) {
+    if (s->report.name.empty()) return;
+    s->report.depth = s->depth;
+    s->report.column_s = s->column_s;
+    s->report.wire_s = s->wire_s;
+    s->report.interval_s = s->interval_s;
+    r_.workers.push_back(std::move(s->report));
+    s->report.name.clear();
+  }
   void NextWave();
   int NextPatch();
   RunState State();
@@ -194,6 +226,8 @@ class Scheduler {
   };
   std::deque<Ready> ready_;  // columns received, to be shot in order
   std::vector<WorkerEvent> events_;   // of the last Poll
+  std::vector<long> skip_;            // per slot, Deferrals()'
+  std::vector<int> held_;             // PatchBelow's scratch
   TurnTimer timer_;
   long log_every_ = 1;                // shots between samples
   double unshot_ = 0;                 // the solver's UnshotFraction() as of the last step
@@ -206,7 +240,8 @@ class Scheduler {
   std::vector<int32_t> changed_;      // Refine's scratch
   std::deque<int> pending_;           // RunState::pending of a resumed run
   double last_checkpoint_ = 0;        // on t_'s clock
-  double heard_ = -1;                 // the last Poll, on t_'s clock (Receive)
+  double looked_ = 0;                 // t_'s clock when the last Poll returned
+  double busy_ = 0;                   // and from then to the next Poll
   RunResult r_;
 };
 
@@ -245,23 +280,162 @@ RunState Scheduler::State() {
   return s;
 }
 
-// Queue sizes (paper §4.1: "3-10 patches according to network size").
-// depth covers the measured round trip: while one column travels back and
-// the next assignment travels out, the worker computes the ones it holds.
-// high adds enough prepared patches to refill that pipeline twice, more
-// with many workers (the master then takes longer to come round to each).
+// Queue sizes (paper §4.1: "3-10 patches according to network size"),
+// from what Measure() keeps per worker. depth covers the round trip:
+// while one column travels back and the next assignment travels out, the
+// worker computes the ones it holds, one per Service() time; on a link
+// slower than the worker's CPU the link paces it, and more than the round
+// trip's worth would only wait in its buffers, held from the other
+// workers. Up to kMaxDepth: a link of 25 ms each way needs some 32 in flight
+// to keep a worker of 1.6 ms a column busy (the paper's 10 kept it busy
+// a third of the time). high adds enough prepared patches to refill
+// that pipeline twice, more with many workers (the master then takes
+// longer to come round to each).
+constexpr int kMaxDepth = 32, kMaxHigh = 64;  // kMaxHigh: --queue's bound
+
 void Scheduler::Sizes(Slot* s, int workers) const {
   if (!Pipelined()) {  // select right before computing: sequential order
     s->depth = s->high = s->low = 1;
     return;
   }
+  if (s->column_s > 0) {
+    // Little's law: in flight = round trip / service time. The wire's
+    // samples leave out a column that waited for a slow link (Measure),
+    // so where the link paces the worker the trip counts its transfer
+    // (the time between columns) besides. (1.25: a worker sharing a busy
+    // core also takes longer in wall time than its CPU time says.)
+    const bool link_paced = s->interval_s > 1.25 * s->column_s;
+    const double trip = s->column_s + s->wire_s + (link_paced ? s->interval_s : 0);
+    s->depth = std::clamp(int(std::ceil(trip / s->Service())), 2, kMaxDepth);
+  }
   if (opts_.queue > 0) {
     s->high = opts_.queue;
     s->depth = std::min(s->depth, s->high);
   } else {
-    s->high = std::clamp(2 * s->depth + workers / 32, 3, 10);
+    s->high = std::clamp(2 * s->depth + workers / 32, 3, kMaxHigh);
   }
   s->low = std::max(1, (s->high + 1) / 2);
+  RunResult::Worker& r = s->report;
+  r.depth_min = r.depth_min ? std::min(r.depth_min, s->depth) : s->depth;
+  r.depth_max = std::max(r.depth_max, s->depth);
+  r.high_max = std::max(r.high_max, s->high);
+}
+
+// A column's times, smoothed per worker (a quarter each new one: a link
+// that slows shows within a few columns, one late column on a loaded
+// machine does not swing the queue). Its time on the wire is the round
+// trip less its wait and compute time in the worker (sent + wait +
+// compute: when it was ready, on the master's clock): its work's way out
+// and its own way back. Only a column that was ready after the one
+// before it arrived counts: one ready before then waited for that one to
+// get through a link slower than the worker's CPU, a wait that grows
+// with the queue (taken for a longer wire, it deepened the queue, which
+// queued more there, and so on up to the bound: one sample of the round
+// trip put 10 in flight to a worker behind pv -L 50k); what such a link
+// takes is the time between its columns. That time is the worker's
+// service time only when it held this one's work before the other
+// arrived; otherwise it waited for work.
+void Scheduler::Measure(Slot* s, const Slot::Sent& sent, const proto::Column& c) {
+  const double now = t_->Now();
+  const double ready = sent.at + c.wait_s + c.compute_s;
+  // (ready is early by the work's way out: about half the wire.)
+  const bool queued = s->last_arrival > ready + s->wire_s / 2;
+  const bool backlogged = s->last_arrival > sent.at;
+  const double interval = now - s->last_arrival;
+  s->last_arrival = now;
+  // The first column also builds the hemicube's buffers: not a sample.
+  if (s->columns == 0 || c.compute_s <= 0) return;
+  auto smooth = [](double* v, double x) { *v = *v > 0 ? *v + (x - *v) / 4 : x; };
+  smooth(&s->column_s, c.compute_s);
+  // A column seen after the master was busy for longer than the column
+  // took (a division pass, a wave's picture) may have waited for it
+  // unread: the master's time, not the link's (one 100 ms picture gave a
+  // local worker 19 in flight).
+  if (busy_ > c.compute_s) return;
+  if (!queued) smooth(&s->wire_s, std::max(0.0, now - ready));
+  if (backlogged) smooth(&s->interval_s, interval);
+}
+
+// Patches deferred per worker (skip_): a patch given to a worker comes
+// back after its Turnaround(); the other workers shoot about
+// Σ 1/Service() patches a second meanwhile. A worker that holds patches
+// more than four times as long as the quickest is given the patch as many
+// places down the order as the others shoot in the difference, not the
+// one with the most power: that one they shoot sooner. Otherwise a worker
+// behind a slow link took the lights at the start of every wave and the
+// run waited for them (the room beside a worker behind 1 Mbit/s in the
+// simulation: 5,860 shots to converge, 6.16 s, against 3,074 and 3.29 s
+// alone; bench/throttle.sh). Equal workers defer nothing, as in the
+// paper's cyclic fill. (Four: equal local workers on two busy cores
+// differ by up to twice for a while.)
+void Scheduler::Deferrals() {
+  skip_.assign(slots_.size(), 0);
+  double quickest = HUGE_VAL, rate = 0;
+  for (const Slot& s : slots_) {
+    if (!s.alive || s.Turnaround() <= 0) continue;
+    quickest = std::min(quickest, s.Turnaround());
+    rate += 1 / s.Service();
+  }
+  for (size_t w = 0; w < slots_.size(); ++w) {
+    const Slot& s = slots_[w];
+    if (!s.alive || s.Turnaround() <= 4 * quickest) continue;
+    const double others = rate - 1 / s.Service();
+    skip_[w] = std::min(long(mesh_.patches.size()),
+                        long(others * (s.Turnaround() - quickest)));
+  }
+}
+
+// Deferral keeps the lights from a slow worker, not the light that its
+// patches gather while they wait there: near the end of a wave the run
+// cannot converge without them. A patch sent to a deferred worker that
+// now has more power to shoot than any patch not owned, and that the
+// quickest worker would return before it (by their Turnaround()), goes
+// to the quickest worker with the shortest queue, first in its queue;
+// the column the slow worker sends for it is stale. (Without the second
+// condition nearly every deferred patch came back this way, when the
+// others had shot those above it: 1,735 of 1,784 behind pv -L 200k.) (The room beside a worker
+// behind 0.2 Mbit/s in the simulation, deferred: 5,910 shots to converge,
+// 7.33 s, against 3,074 and 3.83 s alone; taken back too, 2,907 and
+// 3.51 s against 3.72 s alone: bench/throttle.sh.)
+void Scheduler::Reclaim() {
+  Slot* to = nullptr;
+  double quickest = HUGE_VAL;
+  for (size_t w = 0; w < slots_.size(); ++w) {
+    Slot& s = slots_[w];
+    if (!s.alive || skip_[w] != 0 || s.Turnaround() <= 0) continue;
+    quickest = std::min(quickest, s.Turnaround());
+    if (!to || s.Queued() < to->Queued()) to = &s;
+  }
+  if (!to) return;
+  const double now = t_->Now();
+  const int best = solver_->Select();
+  const double top = best >= 0 ? solver_->PowerToShoot(best) : 0;
+  for (size_t w = 0; w < slots_.size(); ++w) {
+    Slot& s = slots_[w];
+    if (!s.alive || skip_[w] == 0) continue;
+    for (auto it = s.sent.begin(); it != s.sent.end();) {
+      if (it->at + s.Turnaround() <= now + quickest || solver_->PowerToShoot(it->a.patch) <= top) {
+        ++it;
+        continue;
+      }
+      to->prepared.push_front(it->a.patch);
+      ++s.report.reclaimed;
+      it = s.sent.erase(it);
+    }
+  }
+}
+
+// The patch `skip` places down the shooting order, or -1 when fewer have
+// power to shoot.
+int Scheduler::PatchBelow(long skip) {
+  held_.clear();
+  int p;
+  while ((p = solver_->Select()) >= 0 && long(held_.size()) < skip) {
+    solver_->Take(p);
+    held_.push_back(p);
+  }
+  for (int q : held_) solver_->Release(q);
+  return p;
 }
 
 void Scheduler::Release(Slot* s) {
@@ -278,6 +452,7 @@ void Scheduler::Handle(WorkerEvent& ev) {
     case WorkerEvent::kJoined:
       s.alive = true;
       ++r_.joined;
+      s.report.name = t_->Name(ev.worker);
       Sizes(&s, t_->Workers());
       if (Pipelined()) Note(t_->Name(ev.worker) + ": joined", false);
       return;
@@ -304,13 +479,12 @@ void Scheduler::Handle(WorkerEvent& ev) {
         ++r_.stale;
         return;
       }
-      const double net = t_->Now() - it->at - c.compute_s - c.wait_s;
-      if (Pipelined() && c.compute_s > 0 && s.columns > 0) {
-        const int need = 1 + int(std::ceil(std::max(0.0, net) / c.compute_s));
-        s.depth = std::clamp(need, 2, 10);
+      if (Pipelined()) {
+        Measure(&s, *it, c);
         Sizes(&s, t_->Workers());
       }
       ++s.columns;
+      ++s.report.columns;
       ++s.waiting;
       s.sent.erase(it);
       r_.worker_s += c.compute_s;
@@ -326,12 +500,39 @@ void Scheduler::Handle(WorkerEvent& ev) {
 // run go to different workers. Then send what each pipeline has room for.
 void Scheduler::Distribute() {
   const double t0 = MonotonicSeconds();
+  Fill();
+  Send();
+  r_.distribute_s += MonotonicSeconds() - t0;
+}
+
+void Scheduler::Fill() {
+  const long shots = solver_->shots();
   bool low = false;
-  for (const Slot& s : slots_) low |= s.alive && s.Queued() < size_t(s.low);
-  for (bool more = low; more;) {
+  for (const Slot& s : slots_)
+    low |= s.alive && s.Queued() < size_t(s.low) && shots >= s.retry_at;
+  if (!low) return;
+  Deferrals();
+  Reclaim();
+  for (bool more = true; more;) {
     more = false;
-    for (Slot& s : slots_) {
-      if (!s.alive || s.Queued() >= size_t(s.high)) continue;
+    for (size_t w = 0; w < slots_.size(); ++w) {
+      Slot& s = slots_[w];
+      if (!s.alive || s.Queued() >= size_t(s.high) || shots < s.retry_at) continue;
+      if (skip_[w] > 0 && pending_.empty()) {
+        const int p = PatchBelow(skip_[w]);
+        if (p < 0) {
+          // Not that many have power (the start of a wave): nothing for it
+          // until the others have shot some; tried again in a while, so
+          // that the search does not cost the master a pass a shot.
+          s.retry_at = shots + 1 + skip_[w] / 4;
+          continue;
+        }
+        solver_->Take(p);
+        s.prepared.push_back(p);
+        ++s.report.deferred;
+        more = true;
+        continue;
+      }
       const int p = NextPatch();
       if (p < 0) break;  // nothing left with power to shoot: send what is prepared
       solver_->Take(p);  // owned by this worker until shot or lost
@@ -346,8 +547,11 @@ void Scheduler::Distribute() {
   // the start of a wave (only the lights have power), a stopped or slow
   // worker whose queue took the lights held up the whole run until its
   // columns came back or it was dropped (tests/parallel.sh, SIGSTOP).
-  for (Slot& s : slots_) {
-    while (s.alive && s.Queued() < size_t(s.low)) {
+  // A worker whose patches are deferred takes over none: the others
+  // shoot them sooner.
+  for (size_t w = 0; w < slots_.size(); ++w) {
+    Slot& s = slots_[w];
+    while (s.alive && s.Queued() < size_t(s.low) && skip_[w] == 0 && shots >= s.retry_at) {
       Slot* from = nullptr;
       for (Slot& t : slots_)
         if (&t != &s && t.alive && !t.prepared.empty() && t.Queued() > s.Queued() + 1 &&
@@ -358,6 +562,10 @@ void Scheduler::Distribute() {
       from->prepared.pop_back();
     }
   }
+}
+
+// Sends what each pipeline has room for.
+void Scheduler::Send() {
   for (size_t w = 0; w < slots_.size(); ++w) {
     Slot& s = slots_[w];
     while (s.alive && !s.prepared.empty() && s.sent.size() < size_t(s.depth)) {
@@ -371,7 +579,6 @@ void Scheduler::Distribute() {
       t_->Assign(int(w), a);
     }
   }
-  r_.distribute_s += MonotonicSeconds() - t0;
 }
 
 bool Scheduler::Stop() {
@@ -459,7 +666,7 @@ void Scheduler::NextWave() {
 
 void Scheduler::Begin() {
   timer_ = TurnTimer();
-  base_ = t_->Now();
+  base_ = looked_ = t_->Now();
   log_every_ =
       opts_.log_every > 0 ? opts_.log_every : std::max(1L, mesh_.BuiltPatches() / 100);
   unshot_ = solver_->UnshotFraction();
@@ -485,11 +692,12 @@ void Scheduler::Receive() {
   const double t0 = MonotonicSeconds();
   events_.clear();
   const bool idle = ready_.empty();
-  if (ready_.size() >= 2 && t_->Now() - heard_ < kHearEvery) {
+  if (ready_.size() >= 2 && t_->Now() - looked_ < kHearEvery) {
     t_->Send(&events_);
   } else {
+    busy_ = t_->Now() - looked_;
     t_->Poll(idle ? 0.25 : 0.0, &events_);
-    heard_ = t_->Now();
+    looked_ = t_->Now();
   }
   timer_.Polled(MonotonicSeconds() - t0, idle);
   for (WorkerEvent& ev : events_) Handle(ev);
@@ -510,6 +718,7 @@ bool Scheduler::FallBack() {
   fallback_ = opts_.fallback();
   t_ = fallback_.get();
   base_ = last_checkpoint_ = t_->Now();
+  for (Slot& s : slots_) Report(&s);
   slots_.clear();
   for (Ready& r : ready_) r.from = -1;
   return true;
@@ -560,6 +769,7 @@ RunResult Scheduler::Finish() {
   r_.bytes_received = first_->BytesReceived();
   r_.waves = wave_;
   if (sub_) r_.passes = sub_->passes();
+  for (Slot& s : slots_) Report(&s);
   return r_;
 }
 

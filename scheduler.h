@@ -94,6 +94,21 @@ struct RunResult {
   uint64_t bytes_sent = 0, bytes_received = 0;
   long passes = 0;          // division passes
   int waves = 1;
+  // Per worker that joined (pipelined transports only), as its queue was
+  // set from what the master measured (scheduler.cpp, Slot).
+  struct Worker {
+    std::string name;
+    long columns = 0;
+    int depth_min = 0, depth_max = 0;  // patches sent and unanswered, at most
+    int depth = 0;                     // the last, at the end of the run
+    int high_max = 0;                  // the high watermark's largest
+    double column_s = 0;    // its compute time per column (smoothed)
+    double wire_s = 0;      // a column's time on the wire (smoothed)
+    double interval_s = 0;  // between its columns while it had more (smoothed)
+    long deferred = 0;      // patches it was given from below the top
+    long reclaimed = 0;     // patches sent to it, then given to another
+  };
+  std::vector<Worker> workers;
 };
 
 // The master (paper §4): selects patches into per-worker queues, keeps

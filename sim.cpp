@@ -34,6 +34,7 @@ SimTransport::SimTransport(const Mesh& mesh, const SimOptions& opts)
     Schedule(s.from, {Event::kRate, s.worker});
     if (std::isfinite(s.to)) Schedule(s.to, {Event::kRate, s.worker});
   }
+  for (double bps : opts_.link_bps) CHECK(std::isfinite(bps));
   for (const SimOptions::Fluctuation& f : opts_.bandwidth_changes)
     CHECK(f.from <= f.to && f.factor >= 0 && (f.factor > 0 || std::isfinite(f.to)));
   for (const SimOptions::Crash& c : opts_.crashes) {
@@ -86,7 +87,8 @@ double SimTransport::Transmit(size_t bytes) {
     double bits = 8.0 * double(bytes);
     for (;;) {  // through the bandwidth's changes, piece by piece
       double bw = opts_.bandwidth_bps, next = HUGE_VAL;
-      for (const SimOptions::Fluctuation& f : opts_.bandwidth_changes) {
+      for (double bps : opts_.link_bps) CHECK(std::isfinite(bps));
+  for (const SimOptions::Fluctuation& f : opts_.bandwidth_changes) {
         if (f.from <= end && end < f.to) {
           bw *= f.factor;
           next = std::min(next, f.to);
@@ -133,13 +135,27 @@ void SimTransport::Start(int w) {
   wk.busy = true;
 }
 
+void SimTransport::Upload(int w, Event ev) {
+  Worker& wk = workers_[w];
+  const double bps = size_t(w) < opts_.link_bps.size() ? opts_.link_bps[size_t(w)] : 0;
+  if (bps <= 0) {
+    wk.last_arrival = Transmit(ev.bytes);
+    Schedule(wk.last_arrival, std::move(ev));
+    return;
+  }
+  wk.link_free = std::max(now_, wk.link_free) + 8.0 * double(ev.bytes) / bps;
+  Event up{Event::kUp, w, ev.bytes};
+  up.then = ev.kind;
+  up.frame = std::move(ev.frame);
+  Schedule(wk.link_free, std::move(up));
+}
+
 void SimTransport::Finish(int w) {
   Worker& wk = workers_[w];
   wk.busy = false;
-  wk.last_arrival = Transmit(wk.frame.size());
   Event ev{Event::kColumn, w, wk.frame.size()};
   ev.frame = std::move(wk.frame);
-  Schedule(wk.last_arrival, std::move(ev));
+  Upload(w, std::move(ev));
   Start(w);
 }
 
@@ -156,6 +172,13 @@ void SimTransport::Process(Event& ev) {
   if (wk.crashed && ev.kind != Event::kColumn && ev.kind != Event::kLost)
     return;  // into the void
   switch (ev.kind) {
+    case Event::kUp: {  // (what a crashed worker's link held is lost with it)
+      wk.last_arrival = Transmit(ev.bytes);
+      Event arrival{ev.then, ev.worker, ev.bytes};
+      arrival.frame = std::move(ev.frame);
+      Schedule(wk.last_arrival, std::move(arrival));
+      return;
+    }
     case Event::kWork:
       wk.todo.emplace_back(ev.a, now_);
       Start(ev.worker);
@@ -164,8 +187,7 @@ void SimTransport::Process(Event& ev) {
       Schedule(now_ + opts_.startup_s, {Event::kReady, ev.worker});
       return;
     case Event::kReady:
-      wk.last_arrival = Transmit(ready_bytes_);
-      Schedule(wk.last_arrival, {Event::kJoin, ev.worker, ready_bytes_});
+      Upload(ev.worker, {Event::kJoin, ev.worker, ready_bytes_});
       return;
     case Event::kCrash:
       wk.crashed = true;

@@ -23,6 +23,8 @@
 //  * The master's link is one shared medium that all frames, both ways,
 //    cross one after another (FIFO by the time they are sent): a frame of
 //    B bytes holds it 8B / bandwidth seconds, then arrives `latency` later.
+//  * A worker may have a link of its own (link_bps) in front of the
+//    medium: its frames to the master cross it first, one at a time.
 //  * host_cores > 0 puts the master and every worker on one machine of that
 //    many cores (processor sharing: n busy on c < n cores run at c/n speed),
 //    to compare with real runs on this machine; 0 gives each its own.
@@ -66,6 +68,10 @@ struct SimOptions {
     double from, to, factor;
   };
   std::vector<Fluctuation> bandwidth_changes;
+  // Per worker (missing entries, or <= 0: none): bits/s of its own link,
+  // which its frames to the master cross, one after another, before the
+  // shared medium: a rate limiter on its output (pv -L in tests/throttle.sh).
+  std::vector<double> link_bps;
   struct Crash {
     int worker;
     double at;
@@ -128,6 +134,7 @@ class SimTransport : public Transport {
       kCrash,   // a worker dies
       kLost,    // the master learns of it
       kRate,    // a slowdown begins or ends: speeds change
+      kUp,      // a worker's frame has crossed its own link: onto the medium
     } kind;
     int worker;
     size_t bytes = 0;     // of the frame, for the medium and the counts
@@ -144,12 +151,16 @@ class SimTransport : public Transport {
     std::string frame;        // that column, encoded
     double factor = 1;
     double last_arrival = 0;  // of its frames at the master
+    double link_free = 0;     // when its own link is next idle
     long columns = 0;
   };
 
   void Schedule(double t, Event ev);
   // Puts `bytes` on the medium at now_; returns when they arrive.
   double Transmit(size_t bytes);
+  // A frame of worker w's to the master, `ev` on its arrival: across its
+  // own link first, if it has one.
+  void Upload(int w, Event ev);
   double Speed(int w) const;  // column CPU seconds per second, alone on a core
   // Runs the world forward: while the master works `*master_cpu` seconds
   // (master_cpu non-null), else until `until` or, with stop_on_arrival,

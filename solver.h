@@ -55,6 +55,10 @@ class Solver {
   void Take(int p) { queue_.Take(p); }
   void Release(int p) { queue_.Release(p); }
   bool Taken(int p) const { return queue_.Taken(p); }
+  // What Select() ranks shooter p by: its power to shoot now.
+  double PowerToShoot(int p) const {
+    return ShooterPower(p, overshoot_ ? Ambient() : glm::dvec3(0.0));
+  }
   // Select() by looking at every shooter not marked in `taken` (may be
   // null): the reference the queue is tested against.
   int SelectByScan(const std::vector<char>* taken = nullptr) const;

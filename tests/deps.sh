@@ -9,10 +9,11 @@ done
 # The fuzz targets (make fuzz; make check runs them briefly) need clang and
 # libFuzzer, tests/view.sh a browser (headless Chromium), and
 # tests/launchers.sh the cluster launchers it starts workers with (Open
-# MPI's mpirun; Slurm's daemons and srun, authenticated by munge); without
-# them make check skips those tests, so a failure to install these is only
-# a warning.
-optional_pkgs="clang libclang-rt-dev chromium openmpi-bin slurm-wlm munge"
+# MPI's mpirun; Slurm's daemons and srun, authenticated by munge), and
+# tests/throttle.sh a rate limiter for a worker's link (pv); without them
+# make check skips those tests, so a failure to install these is only a
+# warning.
+optional_pkgs="clang libclang-rt-dev chromium openmpi-bin slurm-wlm munge pv"
 optional_missing=""
 for p in $optional_pkgs; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || optional_missing="$optional_missing $p"
@@ -23,7 +24,7 @@ SUDO=""
 if [ "$(id -u)" != 0 ]; then
   if command -v sudo >/dev/null 2>&1; then SUDO=sudo; elif [ -n "$missing" ]; then
     echo "radiosity: need root (or sudo) to install:$missing" >&2; exit 1; else
-    echo "radiosity: warning: need root (or sudo) to install:$optional_missing; the fuzz, view and launcher tests will be skipped" >&2; exit 0; fi
+    echo "radiosity: warning: need root (or sudo) to install:$optional_missing; the fuzz, view, launcher and throttle tests will be skipped" >&2; exit 0; fi
 fi
 $SUDO apt-get update -q || { [ -z "$missing" ] || {
   echo "radiosity: could not install:$missing (apt-get update failed; install them by hand)" >&2
