@@ -453,6 +453,13 @@ void MasterRun::Run() {
                  r.distribute_s, r.receive_s, r.shoot_s, r.wait_s, r.joined, r.lost, r.columns,
                  r.worker_s, r.stale, double(r.bytes_sent) / std::max(1L, r.shots),
                  double(r.bytes_received) / std::max(1L, r.shots));
+  if (opts_.verbosity >= 2 && r.joined > 0)
+    std::fprintf(stderr,
+                 "radiosity: workers idle %.3f s: %.3f s in pictures, %.3f s in division "
+                 "passes, %.3f s with nothing to select, %.3f s otherwise, %.3f s at the end; "
+                 "%.3f s on stale columns\n",
+                 r.idle.Sum(), r.idle.picture, r.idle.pass, r.idle.dry, r.idle.other, r.idle.end,
+                 r.stale_s);
 }
 
 void MasterRun::WriteOutputs() {

@@ -58,6 +58,7 @@ struct Slot {
   struct Sent {
     proto::Assignment a;
     double at;
+    double out = -1;  // when the transport sent it (its next Poll); -1: not yet
   };
   std::deque<Sent> sent;
   std::deque<int> prepared;
@@ -65,6 +66,7 @@ struct Slot {
   int high = 3, low = 2;  // watermarks on Queued()
   long columns = 0;
   int waiting = 0;        // its columns received and not yet shot
+  double free_at = 0;     // when it finished what it has sent back (idle accounting)
   size_t Owned() const { return sent.size() + prepared.size(); }
   // What the watermarks count: its columns waiting to be shot too, so
   // that a master slower than its workers stops feeding them. Otherwise
@@ -84,7 +86,7 @@ struct Slot {
 class TurnTimer {
  public:
   TurnTimer() : wall_(MonotonicSeconds()), cpu_(ThreadCpuSeconds()) {}
-  void Polled(double seconds) { poll_s_ = seconds; }
+  void Polled(double seconds) { poll_s_ += seconds; }
   void EndTurn(RunResult* r) {
     const double wall = MonotonicSeconds(), cpu = ThreadCpuSeconds();
     const double blocked = std::clamp((wall - wall_) - (cpu - cpu_), 0.0, poll_s_);
@@ -128,6 +130,7 @@ class Scheduler {
   void EndConvergedWave();
   bool Stop();
   void Receive();
+  void Poll(double timeout);
   bool FallBack();
   void Distribute();
   bool Exhausted();
@@ -194,7 +197,54 @@ class Scheduler {
   std::deque<int> pending_;           // RunState::pending of a resumed run
   double last_checkpoint_ = 0;        // on t_'s clock
   RunResult r_;
+
+  // Idle accounting (RunResult::idle): what the master did when, as
+  // disjoint spans in time order, kept back to the oldest free_at of a
+  // live worker (no gap starts earlier).
+  enum Cause { kPicture, kPass, kDry };
+  struct Span {
+    double t0, t1;
+    Cause cause;
+  };
+  std::deque<Span> spans_;
+  double dry_from_ = -1;              // nothing to select since; -1: not dry
+  std::vector<int> unsent_;           // slots given work since the last Poll
+  double polled_ = 0;                 // when the last Poll returned (Handle: the one before)
+  void Busy(Cause cause, double t0, double t1);
+  void CountIdle(double from, double to);
 };
+
+// A step of the master's own (a picture, a pass) from t0 to t1: a dry
+// span open meanwhile is cut around it, so that spans never overlap.
+void Scheduler::Busy(Cause cause, double t0, double t1) {
+  if (dry_from_ >= 0) {
+    if (t0 > dry_from_) spans_.push_back({dry_from_, t0, kDry});
+    dry_from_ = t1;
+  }
+  spans_.push_back({t0, t1, cause});
+}
+
+// A worker idle from `from` to `to`, counted by the spans it overlaps; the
+// rest is `other`. Spans no gap can reach any more are dropped.
+void Scheduler::CountIdle(double from, double to) {
+  if (!Pipelined()) return;
+  double oldest = from;
+  for (const Slot& s : slots_)
+    if (s.alive) oldest = std::min(oldest, s.free_at);
+  while (!spans_.empty() && spans_.front().t1 <= oldest) spans_.pop_front();
+  if (to <= from) return;
+  double rest = to - from;
+  auto add = [&](Cause cause, double t0, double t1) {
+    const double o = std::min(to, t1) - std::max(from, t0);
+    if (o <= 0) return;
+    rest -= o;
+    (cause == kPicture ? r_.idle.picture : cause == kPass ? r_.idle.pass : r_.idle.dry) += o;
+  };
+  if (dry_from_ >= 0) add(kDry, dry_from_, to);
+  for (auto it = spans_.rbegin(); it != spans_.rend() && it->t1 > from; ++it)
+    add(it->cause, it->t0, it->t1);
+  r_.idle.other += std::max(0.0, rest);
+}
 
 // The next patch to hand out: first those a resumed run's checkpoint had
 // selected and not shot, then the one with the most power to shoot.
@@ -263,6 +313,7 @@ void Scheduler::Handle(WorkerEvent& ev) {
   switch (ev.kind) {
     case WorkerEvent::kJoined:
       s.alive = true;
+      s.free_at = t_->Now();
       ++r_.joined;
       Sizes(&s, t_->Workers());
       if (Pipelined()) Note(t_->Name(ev.worker) + ": joined", false);
@@ -288,6 +339,7 @@ void Scheduler::Handle(WorkerEvent& ev) {
       // Only an outstanding assignment is shot: never the same patch twice.
       if (!s.alive || it == s.sent.end()) {
         ++r_.stale;
+        r_.stale_s += c.compute_s;
         return;
       }
       const double net = t_->Now() - it->at - c.compute_s - c.wait_s;
@@ -296,6 +348,14 @@ void Scheduler::Handle(WorkerEvent& ev) {
         s.depth = std::clamp(need, 2, 10);
         Sizes(&s, t_->Workers());
       }
+      // The worker took it up when it had it and was done with the one
+      // before, and was done with it after its compute time (CPU: more
+      // wall time when its core is shared), but after the Poll before this
+      // one (which read everything there was) and before now.
+      CountIdle(s.free_at, it->out);
+      const double now = t_->Now();
+      s.free_at = std::clamp(std::max(s.free_at, it->out) + c.compute_s,
+                             std::min(polled_, now), now);
       ++s.columns;
       ++s.waiting;
       s.sent.erase(it);
@@ -355,7 +415,16 @@ void Scheduler::Distribute() {
       if (const PatchGroup* g = GroupOf(mesh_, p)) a.group = *g;
       s.sent.push_back({a, t_->Now()});
       t_->Assign(int(w), a);
+      if (unsent_.empty() || unsent_.back() != int(w)) unsent_.push_back(int(w));
     }
+  }
+  // A queue still under its low mark: nothing was left to select.
+  bool dry = false;
+  for (const Slot& s : slots_) dry |= s.alive && s.Queued() < size_t(s.low);
+  if (dry && dry_from_ < 0) dry_from_ = t_->Now();
+  if (!dry && dry_from_ >= 0) {
+    spans_.push_back({dry_from_, t_->Now(), kDry});
+    dry_from_ = -1;
   }
   r_.distribute_s += MonotonicSeconds() - t0;
 }
@@ -410,11 +479,15 @@ void Scheduler::Subdivide() {
   if (!sub_ || !ready_.empty()) return;
   for (const Slot& s : slots_)
     if (s.alive && Pipelined() && s.Queued() < size_t(s.low)) return;
-  const double t0 = MonotonicSeconds();
+  const long shots_in_wave = solver_->shots() - wave_start_;
+  if (!sub_->Due(shots_in_wave) && !sub_->SplitDue(solver_->DirectDone())) return;
+  const double t0 = MonotonicSeconds(), now = t_->Now();
+  const long passes = sub_->passes();
   const bool over =
-      Refine(mutable_mesh_, solver_, sub_, solver_->shots() - wave_start_, &changed_, &edits_);
+      Refine(mutable_mesh_, solver_, sub_, shots_in_wave, &changed_, &edits_);
   if (!edits_.empty()) t_->Divide(edits_);
   r_.subdivide_s += MonotonicSeconds() - t0;
+  if (sub_->passes() != passes || !edits_.empty()) Busy(kPass, now, t_->Now());
   if (over) NextWave();
   unshot_ = solver_->UnshotFraction();
 }
@@ -429,7 +502,11 @@ void Scheduler::Subdivide() {
 // (tests/parallel.sh's SIGSTOP case, about 1 run in 15).
 void Scheduler::NextWave() {
   solver_->EndWave();
-  if (opts_.wave_end) opts_.wave_end(wave_);
+  if (opts_.wave_end) {
+    const double t0 = t_->Now();
+    opts_.wave_end(wave_);
+    Busy(kPicture, t0, t_->Now());
+  }
   solver_->NewWave();
   for (Slot& s : slots_) {
     for (int p : s.prepared) solver_->Release(p);
@@ -460,12 +537,22 @@ void Scheduler::EndConvergedWave() {
 }
 
 // Waits for workers only when there is nothing to shoot.
-void Scheduler::Receive() {
+void Scheduler::Receive() { Poll(ready_.empty() ? 0.25 : 0.0); }
+
+void Scheduler::Poll(double timeout) {
   const double t0 = MonotonicSeconds();
   events_.clear();
-  t_->Poll(ready_.empty() ? 0.25 : 0.0, &events_);
+  // What Distribute gave since the last Poll goes out in this one.
+  const double out = t_->Now();
+  for (int w : unsent_)
+    for (auto it = slots_[size_t(w)].sent.rbegin(); it != slots_[size_t(w)].sent.rend() && it->out < 0; ++it)
+      it->out = out;
+  unsent_.clear();
+  t_->Poll(timeout, &events_);
+  const double read = t_->Now();
   timer_.Polled(MonotonicSeconds() - t0);
   for (WorkerEvent& ev : events_) Handle(ev);
+  polled_ = read;
 }
 
 // No worker is alive or on its way and no column waits: the fallback
@@ -484,6 +571,7 @@ bool Scheduler::FallBack() {
   t_ = fallback_.get();
   base_ = last_checkpoint_ = t_->Now();
   slots_.clear();
+  unsent_.clear();
   for (Ready& r : ready_) r.from = -1;
   return true;
 }
@@ -524,6 +612,10 @@ void Scheduler::CheckpointIfDue() {
 }
 
 RunResult Scheduler::Finish() {
+  // A worker with nothing left to compute idles to the end.
+  const double now = t_->Now();
+  for (const Slot& s : slots_)
+    if (s.alive && Pipelined() && s.sent.empty()) r_.idle.end += std::max(0.0, now - s.free_at);
   Checkpoint();  // before the last sample, which a resumed run then writes
   if (solver_->shots() % log_every_ != 0) Emit();  // the last state, once
   r_.shots = solver_->shots();

@@ -18,7 +18,8 @@ namespace {
 
 class FakeTransport : public Transport {
  public:
-  FakeTransport(const Mesh& mesh, int workers) : mesh_(mesh), hemicube_(32), queue_(workers) {}
+  FakeTransport(const Mesh& mesh, int workers, int resolution = 32)
+      : mesh_(mesh), hemicube_(resolution), queue_(workers) {}
   int Workers() const override { return int(queue_.size()); }
   int Starting() const override { return joined_ ? 0 : int(queue_.size()); }
   std::string Name(int w) const override { return "fake " + std::to_string(w); }
@@ -51,21 +52,32 @@ class FakeTransport : public Transport {
       queue_[w].clear();
       events->push_back({WorkerEvent::kLost, w, {}, "killed"});
     }
+    if (burst_) {  // everything computed meanwhile, read at once
+      burst_ = false;
+      for (int w = 0; w < Workers(); ++w)
+        while (!lost_.count(w) && !silent_.count(w) && !queue_[w].empty()) Answer(w, events);
+      return;
+    }
+    if (quiet_every_ > 0 && polls_ % quiet_every_ == 0) return;
     for (int i = 0; i < Workers(); ++i) {
       const int w = (next_ + i) % Workers();
       if (lost_.count(w) || silent_.count(w) || queue_[w].empty()) continue;
       next_ = w + 1;
-      const proto::Assignment a = queue_[w].front();
-      queue_[w].erase(queue_[w].begin());
-      WorkerEvent ev{WorkerEvent::kColumn, w, {}, ""};
-      ev.column.patch = a.patch;
-      ev.column.k = a.k;
-      ev.column.compute_s = 1e-3;
-      hemicube_.Column(mesh_, a.patch, a.Group(), 0.0, &ev.column.ff);
-      events->push_back(ev);
-      if (duplicate_at_ == polls_) events->push_back(ev);  // a late copy
+      Answer(w, events);
+      if (duplicate_at_ == polls_) events->push_back(events->back());  // a late copy
       return;
     }
+  }
+  // Worker w's column for its oldest assignment.
+  void Answer(int w, std::vector<WorkerEvent>* events) {
+    const proto::Assignment a = queue_[w].front();
+    queue_[w].erase(queue_[w].begin());
+    WorkerEvent ev{WorkerEvent::kColumn, w, {}, ""};
+    ev.column.patch = a.patch;
+    ev.column.k = a.k;
+    ev.column.compute_s = 1e-3;
+    hemicube_.Column(mesh_, a.patch, a.Group(), 0.0, &ev.column.ff);
+    events->push_back(std::move(ev));
   }
 
   const Mesh& mesh_;
@@ -80,6 +92,10 @@ class FakeTransport : public Transport {
   bool never_join_ = false, joined_ = false, lost_all_ = false;
   size_t max_outstanding_ = 0;
   long polls_ = 0;
+  // Every so many polls bring nothing (the workers still computing):
+  // then the columns waiting are shot and the master may divide.
+  long quiet_every_ = 0;
+  bool burst_ = false;  // the next Poll answers every assignment (after a long step)
   int next_ = 0;
   double now_ = 0;
 };
@@ -393,6 +409,37 @@ TEST(Scheduler, NoWorkerAtAll) {
   RunResult r = RunMaster(&m, Opts(), &solver, nullptr, &t, nullptr, nullptr);
   EXPECT_EQ(r.status, RunStatus::kNoWorkers);
   EXPECT_EQ(r.shots, 0);
+}
+
+// Idle accounting: a picture that takes the master a second leaves both
+// workers idle for about that second (their queues hold a few
+// milliseconds of work), counted as the picture's; pictures that take no
+// time leave none.
+TEST(Scheduler, IdleWorkersAreCountedByWhatTheMasterDid) {
+  for (const double picture_s : {1.0, 0.0}) {
+    MeshOptions mo;
+    mo.patch_size = 0.25;
+    Mesh m = MakeMesh(ShadowScene(), mo);
+    Solver solver(m, true);
+    Subdivider sub(&m, SubdivideOptions());
+    FakeTransport t(m, 2, 128);
+    t.quiet_every_ = 3;
+    RunOptions o = Opts();
+    o.resolution = 128;
+    o.wave_end = [&](int) {
+      t.now_ += picture_s;
+      t.burst_ = true;
+    };
+    const RunResult r = RunMaster(&m, o, &solver, &sub, &t, nullptr, nullptr);
+    ASSERT_EQ(r.status, RunStatus::kConverged);
+    ASSERT_GT(r.waves, 1);
+    const double pictures = 2 * picture_s * (r.waves - 1);  // worker-seconds
+    EXPECT_GE(r.idle.picture, 0.97 * pictures);
+    EXPECT_LE(r.idle.picture, pictures);
+    EXPECT_LT(r.idle.Sum() - r.idle.picture, 0.05)
+        << "pass " << r.idle.pass << ", dry " << r.idle.dry << ", other " << r.idle.other
+        << ", end " << r.idle.end;
+  }
 }
 
 }  // namespace
