@@ -130,6 +130,7 @@ class Scheduler {
   void EndConvergedWave();
   bool Stop();
   void Receive();
+  void SendNow();
   void Poll(double timeout);
   bool FallBack();
   void Distribute();
@@ -481,6 +482,7 @@ void Scheduler::Subdivide() {
     if (s.alive && Pipelined() && s.Queued() < size_t(s.low)) return;
   const long shots_in_wave = solver_->shots() - wave_start_;
   if (!sub_->Due(shots_in_wave) && !sub_->SplitDue(solver_->DirectDone())) return;
+  SendNow();
   const double t0 = MonotonicSeconds(), now = t_->Now();
   const long passes = sub_->passes();
   const bool over =
@@ -503,6 +505,7 @@ void Scheduler::Subdivide() {
 void Scheduler::NextWave() {
   solver_->EndWave();
   if (opts_.wave_end) {
+    SendNow();
     const double t0 = t_->Now();
     opts_.wave_end(wave_);
     Busy(kPicture, t0, t_->Now());
@@ -538,6 +541,14 @@ void Scheduler::EndConvergedWave() {
 
 // Waits for workers only when there is nothing to shoot.
 void Scheduler::Receive() { Poll(ready_.empty() ? 0.25 : 0.0); }
+
+// Before a long step of the master's own (a division pass, a wave's
+// picture): the work Distribute gave out goes to the workers now, not at
+// the next turn's Poll after the step, when they may long have run dry.
+// Columns that came meanwhile wait in ready_ like any other.
+void Scheduler::SendNow() {
+  if (Pipelined() && !unsent_.empty()) Poll(0.0);
+}
 
 void Scheduler::Poll(double timeout) {
   const double t0 = MonotonicSeconds();

@@ -29,13 +29,20 @@ class FakeTransport : public Transport {
     log_.push_back({w, a.patch});
     sent_.push_back(a);
     max_outstanding_ = std::max(max_outstanding_, queue_[w].size());
+    ++unsent_;
   }
-  void Divide(const std::vector<int32_t>&) override {}
+  // Sent in Poll, as the worker pool sends: what was given out and not
+  // yet sent when the master divides.
+  void Divide(const std::vector<int32_t>&) override {
+    ++divides_;
+    unsent_at_divide_ += unsent_;
+  }
   double Now() override { return now_; }
 
   // Each Poll: the first joins everyone; later ones answer one assignment
   // of each worker in turn (round robin), as workers of equal speed would.
   void Poll(double, std::vector<WorkerEvent>* events) override {
+    unsent_ = 0;
     now_ += 1e-3;
     if (!joined_) {
       joined_ = true;
@@ -92,6 +99,7 @@ class FakeTransport : public Transport {
   bool never_join_ = false, joined_ = false, lost_all_ = false;
   size_t max_outstanding_ = 0;
   long polls_ = 0;
+  long unsent_ = 0, divides_ = 0, unsent_at_divide_ = 0;
   // Every so many polls bring nothing (the workers still computing):
   // then the columns waiting are shot and the master may divide.
   long quiet_every_ = 0;
@@ -409,6 +417,30 @@ TEST(Scheduler, NoWorkerAtAll) {
   RunResult r = RunMaster(&m, Opts(), &solver, nullptr, &t, nullptr, nullptr);
   EXPECT_EQ(r.status, RunStatus::kNoWorkers);
   EXPECT_EQ(r.shots, 0);
+}
+
+// The master's own long steps (a division pass, a wave's picture) come
+// after the work given out has gone to the workers: with the transport
+// sending in Poll, that work used to wait until the step was over, and
+// the workers with it.
+TEST(Scheduler, WorkGoesOutBeforeAPassOrAPicture) {
+  MeshOptions mo;
+  mo.patch_size = 0.25;
+  Mesh m = MakeMesh(ShadowScene(), mo);
+  Solver solver(m, true);
+  Subdivider sub(&m, SubdivideOptions());
+  FakeTransport t(m, 2, 128);
+  t.quiet_every_ = 5;  // 3 or 4: the fake never gave work just before a pass
+  std::vector<long> unsent_at_picture;
+  RunOptions o = Opts();
+  o.resolution = 128;
+  o.wave_end = [&](int) { unsent_at_picture.push_back(t.unsent_); };
+  const RunResult r = RunMaster(&m, o, &solver, &sub, &t, nullptr, nullptr);
+  ASSERT_EQ(r.status, RunStatus::kConverged);
+  ASSERT_GT(t.divides_, 0) << r.shots << " shots, " << r.passes << " passes, status " << int(r.status);
+  ASSERT_GT(r.waves, 1);
+  EXPECT_EQ(t.unsent_at_divide_, 0);
+  EXPECT_EQ(unsent_at_picture, std::vector<long>(size_t(r.waves - 1), 0));
 }
 
 // Idle accounting: a picture that takes the master a second leaves both
