@@ -457,12 +457,11 @@ std::pair<ShadedMesh, float> MasterRun::Picture(const ElemB& b,
   const float exposure = AutoExposure(shaded);
   auto img = std::make_shared<Image>();
   Render(shaded, camera_, opts_.width, opts_.height, img.get());
-  // The files in turn on one thread (their buffers one at a time, as
-  // before), while the run, or the rest of the outputs, go on.
+  // Encoded once, the files in turn on one thread (their buffers one at
+  // a time, as before), while the run, or the rest of the outputs, go on.
   writers_.Start([img, exposure, paths, hdr_path, format = opts_.format](std::string* e) {
-    for (const std::string& path : paths)
-      if (!WriteImage(*img, exposure, path, format, e)) return false;
-    return hdr_path.empty() || WriteRadianceHdr(*img, hdr_path, e);
+    return WriteImage(*img, exposure, paths, format, e) &&
+           (hdr_path.empty() || WriteRadianceHdr(*img, hdr_path, e));
   });
   return std::make_pair(std::move(shaded), exposure);
 }
