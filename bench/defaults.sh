@@ -5,7 +5,7 @@
 # sys, master and worker) spread over J cores; "of ideal" is that over
 # the -j J run's wall time. The row shown is the median pair by that
 # fraction. Then where the -j J run's workers stood idle, in worker-seconds
-# as the master reconstructs it (-v -v, RunResult::idle in scheduler.h):
+# as the master reconstructs it (-v, RunResult::idle in scheduler.h):
 # in a wave's picture, in division passes, with nothing to select (every
 # patch with power owned), otherwise (receiving, shooting, the workers'
 # own time outside the form factors), and at the end; and the seconds
@@ -25,7 +25,7 @@ T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
 load() { cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?"; }
 # One run: prints "wall cpu run-seconds idle..." (idle: 5 fields or "-").
 run() {  # BINARY JOBS SCENE
-  /usr/bin/time -f "TIME %e %U %S" -o "$T/time" "$1" -v -v -j "$2" -o "$T/out" "scenes/$3.obj" \
+  /usr/bin/time -f "TIME %e %U %S" -o "$T/time" "$1" -v -j "$2" -o "$T/out" "scenes/$3.obj" \
     2>"$T/err" >/dev/null || { echo "bench/defaults.sh: $1 -j $2 $3 failed" >&2; tail -3 "$T/err" >&2; exit 1; }
   awk '/^TIME/ { w = $2; c = $3 + $4 }
        END { printf "%s %.2f", w, c }' "$T/time"
