@@ -66,7 +66,7 @@ struct Slot {
   int high = 3, low = 2;  // watermarks on Queued()
   long columns = 0;
   int waiting = 0;        // its columns received and not yet shot
-  double free_at = 0;     // when it finished what it has sent back (idle accounting)
+  double free_at = 0;     // when it was done with the columns read so far (idle accounting)
   size_t Owned() const { return sent.size() + prepared.size(); }
   // What the watermarks count: its columns waiting to be shot too, so
   // that a master slower than its workers stops feeding them. Otherwise
@@ -555,9 +555,10 @@ void Scheduler::Poll(double timeout) {
   events_.clear();
   // What Distribute gave since the last Poll goes out in this one.
   const double out = t_->Now();
-  for (int w : unsent_)
-    for (auto it = slots_[size_t(w)].sent.rbegin(); it != slots_[size_t(w)].sent.rend() && it->out < 0; ++it)
-      it->out = out;
+  for (int w : unsent_) {
+    std::deque<Slot::Sent>& sent = slots_[size_t(w)].sent;
+    for (auto it = sent.rbegin(); it != sent.rend() && it->out < 0; ++it) it->out = out;
+  }
   unsent_.clear();
   t_->Poll(timeout, &events_);
   const double read = t_->Now();
