@@ -43,12 +43,15 @@ std::string StoppedBy() {
   return name ? std::string("stopped on request (") + name + ")" : "stopped on request";
 }
 
-// The run's outputs not yet moved into place: removed when it dies.
+// The run's outputs not yet moved into place: removed when it dies,
+// after the pictures being written into them.
 Staging* g_staging = nullptr;
+Writers* g_writers = nullptr;
 
 void Say(const std::string& line) { std::fprintf(stderr, "radiosity: %s\n", Printable(line).c_str()); }
 
 [[noreturn]] void Die(int status, const std::string& msg) {
+  if (g_writers) g_writers->Wait();
   if (g_staging) g_staging->Discard();
   Say(msg);
   std::exit(status);
@@ -128,9 +131,31 @@ ExitStatus WorkerMain(const Options& opts) {
   return ExitStatus(status);
 }
 
+void Writers::Start(std::function<bool(std::string* err)> write) {
+  jobs_.emplace_back();
+  Job& job = jobs_.back();
+  job.thread = std::thread([&job, write = std::move(write)] {
+    if (!write(&job.err) && job.err.empty()) job.err = "cannot write a picture";
+  });
+}
+
+std::string Writers::Wait() {
+  std::string first;
+  for (Job& job : jobs_) {
+    job.thread.join();
+    if (first.empty()) first = job.err;
+  }
+  jobs_.clear();
+  return first;
+}
+
 MasterRun::MasterRun(const Options& opts) : opts_(opts), run_(opts.run) {}
 
-MasterRun::~MasterRun() { g_staging = nullptr; }
+MasterRun::~MasterRun() {
+  writers_.Wait();
+  g_writers = nullptr;
+  g_staging = nullptr;
+}
 
 void MasterRun::Build() {
   MapLargeArrays();
@@ -201,6 +226,7 @@ void MasterRun::Build() {
 
   if (!staging_.Open(opts_.out_dir, &err)) Die(kExitFailure, err);
   g_staging = &staging_;
+  g_writers = &writers_;
   if (!log_.Open(staging_.Path("log.csv"), &err)) Die(kExitFailure, err);
   if (!opts_.resume_file.empty()) log_.Restore(resume_.log);
   if (!opts_.view.empty()) {
@@ -423,15 +449,20 @@ std::string MasterRun::FrameName(int wave) const {
 std::pair<ShadedMesh, float> MasterRun::Picture(const ElemB& b,
                                                 const std::vector<std::string>& paths,
                                                 const std::string& hdr_path) {
-  std::string err;
+  // One picture's pixels at a time (up to 18 bytes a pixel, image.h).
+  const std::string err = writers_.Wait();
+  if (!err.empty()) Die(kExitFailure, err);
   ShadedMesh shaded = Shade(mesh_, b);
   // Its arrays gone before the picture's pixels come.
   const float exposure = AutoExposure(shaded);
-  Image img;
-  Render(shaded, camera_, opts_.width, opts_.height, &img);
-  for (const std::string& path : paths)
-    if (!WriteImage(img, exposure, path, opts_.format, &err)) Die(kExitFailure, err);
-  if (!hdr_path.empty() && !WriteRadianceHdr(img, hdr_path, &err)) Die(kExitFailure, err);
+  auto img = std::make_shared<Image>();
+  Render(shaded, camera_, opts_.width, opts_.height, img.get());
+  // Encoded once, the files in turn on one thread (their buffers one at
+  // a time, as before), while the run, or the rest of the outputs, go on.
+  writers_.Start([img, exposure, paths, hdr_path, format = opts_.format](std::string* e) {
+    return WriteImage(*img, exposure, paths, format, e) &&
+           (hdr_path.empty() || WriteRadianceHdr(*img, hdr_path, e));
+  });
   return std::make_pair(std::move(shaded), exposure);
 }
 
@@ -461,6 +492,13 @@ void MasterRun::Run() {
                    "every %.2f ms\n",
                    Printable(w.name).c_str(), w.columns, w.deferred, w.reclaimed, w.depth_min, w.depth_max,
                    w.depth, w.high_max, 1e3 * w.column_s, 1e3 * w.wire_s, 1e3 * w.interval_s);
+  if (opts_.verbosity >= 2 && r.joined > 0)
+    std::fprintf(stderr,
+                 "radiosity: workers idle %.3f s: %.3f s in pictures, %.3f s in division "
+                 "passes, %.3f s with nothing to select, %.3f s otherwise, %.3f s at the end; "
+                 "%.3f s on stale columns\n",
+                 r.idle.Sum(), r.idle.picture, r.idle.pass, r.idle.dry, r.idle.other, r.idle.end,
+                 r.stale_s);
 }
 
 void MasterRun::WriteOutputs() {
@@ -477,7 +515,8 @@ void MasterRun::WriteOutputs() {
   // Every output of the run moved into place at once, and the rest of an
   // earlier run's removed: the directory holds one run's files.
   auto commit = [&] {
-    if (!staging_.Commit(inputs_, OutputName, &err)) Die(kExitFailure, err);
+    err = writers_.Wait();
+    if (!err.empty() || !staging_.Commit(inputs_, OutputName, &err)) Die(kExitFailure, err);
   };
   if (r.status == RunStatus::kNoWorkers) {
     commit();

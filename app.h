@@ -5,8 +5,11 @@
 #define RADIOSITY_APP_H
 
 #include <cmath>
+#include <functional>
+#include <list>
 #include <memory>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -38,6 +41,28 @@ ExitStatus DumpHosts(const Options& opts);
 // --connect HOST:PORT.
 ExitStatus WorkerMain(const Options& opts);
 
+// Files written on threads of their own while the master goes on: a
+// wave's picture took 65-80 ms on the room, 45-60 of them encoding the
+// PNG, time in which the master's loop fed no worker (bench/defaults.sh).
+class Writers {
+ public:
+  Writers() = default;
+  Writers(const Writers&) = delete;
+  Writers& operator=(const Writers&) = delete;
+  ~Writers() { Wait(); }
+  // Runs `write` (false with *err on failure) on a thread of its own.
+  void Start(std::function<bool(std::string* err)> write);
+  // Waits for every write started; the first error, or "".
+  std::string Wait();
+
+ private:
+  struct Job {
+    std::thread thread;
+    std::string err;  // written by the job's thread only, read after join
+  };
+  std::list<Job> jobs_;  // a list: a running job's err stays where it is
+};
+
 // A master's run in the order main takes it.
 class MasterRun {
  public:
@@ -63,7 +88,8 @@ class MasterRun {
   void Note(const std::string& line, bool warning);
   std::string FrameName(int wave) const;
   // Renders the solution `b` (per element) once and writes it to every
-  // path (and to hdr_path as Radiance RGBE, if given).
+  // path (and to hdr_path as Radiance RGBE, if given) on a thread of
+  // writers_, after the picture before it is written.
   std::pair<ShadedMesh, float> Picture(const ElemB& b,
                                        const std::vector<std::string>& paths,
                                        const std::string& hdr_path = "");
@@ -73,6 +99,7 @@ class MasterRun {
   const Options& opts_;
   std::vector<Input> inputs_;  // what no output may replace
   Staging staging_;            // the outputs until they are all written
+  Writers writers_;            // pictures being written into staging_
   RunOptions run_;  // opts_.run with the run's hooks
   Scene scene_;
   Camera camera_;

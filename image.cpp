@@ -450,13 +450,18 @@ float AutoExposure(const ShadedMesh& mesh) {
                           double(std::numeric_limits<float>::max())));
 }
 
-bool WriteImage(const Image& img, float exposure, const std::string& path,
+bool WriteImage(const Image& img, float exposure, const std::vector<std::string>& paths,
                 const std::string& format, std::string* err) {
   CHECK(img.width > 0 && img.height > 0 &&
         img.pixels.size() == size_t(img.width) * img.height);
-  if (format == "exr") return WriteOpenExr(img, path, err);  // linear: no exposure
+  if (format == "exr") {  // linear: no exposure
+    for (const std::string& path : paths)
+      if (!WriteOpenExr(img, path, err)) return false;
+    return true;
+  }
   if (format != "png" && format != "ppm") {
-    *err = path + ": unknown image format \"" + format + "\" (png, ppm or exr)";
+    *err = (paths.empty() ? std::string() : paths[0] + ": ") + "unknown image format \"" + format +
+           "\" (png, ppm or exr)";
     return false;
   }
   std::vector<uint8_t> rgb(img.pixels.size() * 3);
@@ -468,14 +473,16 @@ bool WriteImage(const Image& img, float exposure, const std::string& path,
   if (format == "png") {
     if (!stbi_write_png_to_func(AppendBytes, &bytes, img.width, img.height, 3,
                                 rgb.data(), img.width * 3)) {
-      *err = path + ": cannot encode PNG";
+      *err = (paths.empty() ? std::string() : paths[0] + ": ") + "cannot encode PNG";
       return false;
     }
   } else {
     bytes = "P6\n" + std::to_string(img.width) + " " + std::to_string(img.height) + "\n255\n";
     bytes.append(reinterpret_cast<const char*>(rgb.data()), rgb.size());
   }
-  return WriteFileAtomic(path, bytes, err);
+  for (const std::string& path : paths)
+    if (!WriteFileAtomic(path, bytes, err)) return false;
+  return true;
 }
 
 bool WriteRadianceHdr(const Image& img, const std::string& path, std::string* err) {

@@ -58,6 +58,7 @@ struct Slot {
   struct Sent {
     proto::Assignment a;
     double at;
+    double out = -1;  // when the transport sent it (its next Poll); -1: not yet
   };
   std::deque<Sent> sent;
   std::deque<int> prepared;
@@ -75,6 +76,7 @@ struct Slot {
   double last_arrival = -1;
   long retry_at = 0;       // shots: no patch far enough down for it until then
   RunResult::Worker report;
+  double free_at = 0;     // when it was done with the columns read so far (idle accounting)
   size_t Owned() const { return sent.size() + prepared.size(); }
   // What the watermarks count: its columns waiting to be shot too, so
   // that a master slower than its workers stops feeding them. Otherwise
@@ -103,9 +105,11 @@ struct Slot {
 class TurnTimer {
  public:
   TurnTimer() : wall_(MonotonicSeconds()), cpu_(ThreadCpuSeconds()) {}
+  // Several Polls and Sends may make one turn (work sent before a pass or
+  // a picture): their times add up, and the turn could wait if any could.
   void Polled(double seconds, bool could_wait) {
-    poll_s_ = seconds;
-    could_wait_ = could_wait;
+    poll_s_ += seconds;
+    could_wait_ |= could_wait;
   }
   void EndTurn(RunResult* r) {
     if (!could_wait_) {
@@ -157,6 +161,10 @@ class Scheduler {
   void EndConvergedWave();
   bool Stop();
   void Receive();
+  void SendNow();
+  void MarkSent();
+  void Transmit();
+  void Poll(double timeout);
   bool FallBack();
   void Distribute();
   void Fill();
@@ -243,7 +251,54 @@ class Scheduler {
   double looked_ = 0;                 // t_'s clock when the last Poll returned
   double busy_ = 0;                   // and from then to the next Poll
   RunResult r_;
+
+  // Idle accounting (RunResult::idle): what the master did when, as
+  // disjoint spans in time order, kept back to the oldest free_at of a
+  // live worker (no gap starts earlier).
+  enum Cause { kPicture, kPass, kDry };
+  struct Span {
+    double t0, t1;
+    Cause cause;
+  };
+  std::deque<Span> spans_;
+  double dry_from_ = -1;              // nothing to select since; -1: not dry
+  std::vector<int> unsent_;           // slots given work since the last Poll
+  double polled_ = 0;                 // when the last Poll returned (Handle: the one before)
+  void Busy(Cause cause, double t0, double t1);
+  void CountIdle(double from, double to);
 };
+
+// A step of the master's own (a picture, a pass) from t0 to t1: a dry
+// span open meanwhile is cut around it, so that spans never overlap.
+void Scheduler::Busy(Cause cause, double t0, double t1) {
+  if (dry_from_ >= 0) {
+    if (t0 > dry_from_) spans_.push_back({dry_from_, t0, kDry});
+    dry_from_ = t1;
+  }
+  spans_.push_back({t0, t1, cause});
+}
+
+// A worker idle from `from` to `to`, counted by the spans it overlaps; the
+// rest is `other`. Spans no gap can reach any more are dropped.
+void Scheduler::CountIdle(double from, double to) {
+  if (!Pipelined()) return;
+  double oldest = from;
+  for (const Slot& s : slots_)
+    if (s.alive) oldest = std::min(oldest, s.free_at);
+  while (!spans_.empty() && spans_.front().t1 <= oldest) spans_.pop_front();
+  if (to <= from) return;
+  double rest = to - from;
+  auto add = [&](Cause cause, double t0, double t1) {
+    const double o = std::min(to, t1) - std::max(from, t0);
+    if (o <= 0) return;
+    rest -= o;
+    (cause == kPicture ? r_.idle.picture : cause == kPass ? r_.idle.pass : r_.idle.dry) += o;
+  };
+  if (dry_from_ >= 0) add(kDry, dry_from_, to);
+  for (auto it = spans_.rbegin(); it != spans_.rend() && it->t1 > from; ++it)
+    add(it->cause, it->t0, it->t1);
+  r_.idle.other += std::max(0.0, rest);
+}
 
 // The next patch to hand out: first those a resumed run's checkpoint had
 // selected and not shot, then the one with the most power to shoot.
@@ -451,6 +506,7 @@ void Scheduler::Handle(WorkerEvent& ev) {
   switch (ev.kind) {
     case WorkerEvent::kJoined:
       s.alive = true;
+      s.free_at = t_->Now();
       ++r_.joined;
       s.report.name = t_->Name(ev.worker);
       Sizes(&s, t_->Workers());
@@ -477,12 +533,21 @@ void Scheduler::Handle(WorkerEvent& ev) {
       // Only an outstanding assignment is shot: never the same patch twice.
       if (!s.alive || it == s.sent.end()) {
         ++r_.stale;
+        r_.stale_s += c.compute_s;
         return;
       }
       if (Pipelined()) {
         Measure(&s, *it, c);
         Sizes(&s, t_->Workers());
       }
+      // The worker took it up when it had it and was done with the one
+      // before, and was done with it after its compute time (CPU: more
+      // wall time when its core is shared), but after the Poll before this
+      // one (which read everything there was) and before now.
+      CountIdle(s.free_at, it->out);
+      const double now = t_->Now();
+      s.free_at = std::clamp(std::max(s.free_at, it->out) + c.compute_s,
+                             std::min(polled_, now), now);
       ++s.columns;
       ++s.report.columns;
       ++s.waiting;
@@ -502,6 +567,14 @@ void Scheduler::Distribute() {
   const double t0 = MonotonicSeconds();
   Fill();
   Send();
+  // A queue still under its low mark: nothing was left to select.
+  bool dry = false;
+  for (const Slot& s : slots_) dry |= s.alive && s.Queued() < size_t(s.low);
+  if (dry && dry_from_ < 0) dry_from_ = t_->Now();
+  if (!dry && dry_from_ >= 0) {
+    spans_.push_back({dry_from_, t_->Now(), kDry});
+    dry_from_ = -1;
+  }
   r_.distribute_s += MonotonicSeconds() - t0;
 }
 
@@ -577,6 +650,7 @@ void Scheduler::Send() {
       if (const PatchGroup* g = GroupOf(mesh_, p)) a.group = *g;
       s.sent.push_back({a, t_->Now()});
       t_->Assign(int(w), a);
+      if (unsent_.empty() || unsent_.back() != int(w)) unsent_.push_back(int(w));
     }
   }
 }
@@ -631,11 +705,16 @@ void Scheduler::Subdivide() {
   if (!sub_ || !ready_.empty()) return;
   for (const Slot& s : slots_)
     if (s.alive && Pipelined() && s.Queued() < size_t(s.low)) return;
-  const double t0 = MonotonicSeconds();
+  const long shots_in_wave = solver_->shots() - wave_start_;
+  if (!sub_->Due(shots_in_wave) && !sub_->SplitDue(solver_->DirectDone())) return;
+  SendNow();
+  const double t0 = MonotonicSeconds(), now = t_->Now();
+  const long passes = sub_->passes();
   const bool over =
-      Refine(mutable_mesh_, solver_, sub_, solver_->shots() - wave_start_, &changed_, &edits_);
+      Refine(mutable_mesh_, solver_, sub_, shots_in_wave, &changed_, &edits_);
   if (!edits_.empty()) t_->Divide(edits_);
   r_.subdivide_s += MonotonicSeconds() - t0;
+  if (sub_->passes() != passes || !edits_.empty()) Busy(kPass, now, t_->Now());
   if (over) NextWave();
   unshot_ = solver_->UnshotFraction();
 }
@@ -650,7 +729,12 @@ void Scheduler::Subdivide() {
 // (tests/parallel.sh's SIGSTOP case, about 1 run in 15).
 void Scheduler::NextWave() {
   solver_->EndWave();
-  if (opts_.wave_end) opts_.wave_end(wave_);
+  if (opts_.wave_end) {
+    SendNow();
+    const double t0 = t_->Now();
+    opts_.wave_end(wave_);
+    Busy(kPicture, t0, t_->Now());
+  }
   solver_->NewWave();
   for (Slot& s : slots_) {
     for (int p : s.prepared) solver_->Release(p);
@@ -689,18 +773,51 @@ void Scheduler::EndConvergedWave() {
 // is already here.
 void Scheduler::Receive() {
   constexpr double kHearEvery = 100e-6;
+  if (ready_.size() >= 2 && t_->Now() - looked_ < kHearEvery)
+    Transmit();
+  else
+    Poll(ready_.empty() ? 0.25 : 0.0);
+}
+
+// Before a long step of the master's own (a division pass, a wave's
+// picture): the work Distribute gave out goes to the workers now, not at
+// the next turn's Poll after the step, when they may long have run dry.
+void Scheduler::SendNow() {
+  if (Pipelined() && !unsent_.empty()) Transmit();
+}
+
+// What Distribute gave since the last Poll or Transmit goes out in this one.
+void Scheduler::MarkSent() {
+  const double out = t_->Now();
+  for (int w : unsent_) {
+    std::deque<Slot::Sent>& sent = slots_[size_t(w)].sent;
+    for (auto it = sent.rbegin(); it != sent.rend() && it->out < 0; ++it) it->out = out;
+  }
+  unsent_.clear();
+}
+
+// Sends the work given out, reading nothing (a worker lost in sending is
+// the one event).
+void Scheduler::Transmit() {
   const double t0 = MonotonicSeconds();
   events_.clear();
-  const bool idle = ready_.empty();
-  if (ready_.size() >= 2 && t_->Now() - looked_ < kHearEvery) {
-    t_->Send(&events_);
-  } else {
-    busy_ = t_->Now() - looked_;
-    t_->Poll(idle ? 0.25 : 0.0, &events_);
-    looked_ = t_->Now();
-  }
-  timer_.Polled(MonotonicSeconds() - t0, idle);
+  MarkSent();
+  t_->Send(&events_);
+  timer_.Polled(MonotonicSeconds() - t0, false);
   for (WorkerEvent& ev : events_) Handle(ev);
+}
+
+void Scheduler::Poll(double timeout) {
+  const double t0 = MonotonicSeconds();
+  events_.clear();
+  MarkSent();
+  busy_ = t_->Now() - looked_;
+  t_->Poll(timeout, &events_);
+  const double read = t_->Now();
+  looked_ = read;
+  timer_.Polled(MonotonicSeconds() - t0, timeout > 0);
+  for (WorkerEvent& ev : events_) Handle(ev);
+  polled_ = read;
 }
 
 // No worker is alive or on its way and no column waits: the fallback
@@ -720,6 +837,7 @@ bool Scheduler::FallBack() {
   base_ = last_checkpoint_ = t_->Now();
   for (Slot& s : slots_) Report(&s);
   slots_.clear();
+  unsent_.clear();
   for (Ready& r : ready_) r.from = -1;
   return true;
 }
@@ -760,6 +878,10 @@ void Scheduler::CheckpointIfDue() {
 }
 
 RunResult Scheduler::Finish() {
+  // A worker with nothing left to compute idles to the end.
+  const double now = t_->Now();
+  for (const Slot& s : slots_)
+    if (s.alive && Pipelined() && s.sent.empty()) r_.idle.end += std::max(0.0, now - s.free_at);
   Checkpoint();  // before the last sample, which a resumed run then writes
   if (solver_->shots() % log_every_ != 0) Emit();  // the last state, once
   r_.shots = solver_->shots();

@@ -109,6 +109,20 @@ struct RunResult {
     long reclaimed = 0;     // patches sent to it, then given to another
   };
   std::vector<Worker> workers;
+  // The workers' idle time (worker-seconds) as the master reconstructs it:
+  // a worker computes its assignments in the order sent, starting each
+  // when it has arrived and the one before is done (done: its compute
+  // time after its start, or its arrival at the master if sooner). The
+  // gaps, by what the master was doing meanwhile (first that applies):
+  struct Idle {
+    double picture = 0;  // in RunOptions::wave_end (a wave's picture)
+    double pass = 0;     // dividing (a division pass, shooter splits)
+    double dry = 0;      // nothing left to select: every patch with power owned
+    double other = 0;    // the rest: receiving, shooting, a queue too shallow
+    double end = 0;      // after its last column, to the end of the run
+    double Sum() const { return picture + pass + dry + other + end; }
+  } idle;
+  double stale_s = 0;       // compute time of the stale columns (thrown away)
 };
 
 // The master (paper §4): selects patches into per-worker queues, keeps

@@ -20,20 +20,6 @@
 
 namespace {
 
-// A small light over a square occluder and a floor: a sharp shadow, so
-// that the run divides and goes through waves.
-Scene ShadowScene() {
-  Scene s = EmptyScene();
-  AddFace(&s, {{-1, -1, 0}, {2, -1, 0}, {2, 2, 0}, {-1, 2, 0}}, glm::dvec3(0.6), glm::dvec3(0));
-  AddFace(&s, {{0.3, 0.3, 1}, {0.3, 0.7, 1}, {0.7, 0.7, 1}, {0.7, 0.3, 1}}, glm::dvec3(0.5),
-          glm::dvec3(0));
-  AddFace(&s, {{0.3, 0.3, 1.001}, {0.7, 0.3, 1.001}, {0.7, 0.7, 1.001}, {0.3, 0.7, 1.001}},
-          glm::dvec3(0.5), glm::dvec3(0));
-  AddFace(&s, {{0.48, 0.48, 2}, {0.48, 0.52, 2}, {0.52, 0.52, 2}, {0.52, 0.48, 2}}, glm::dvec3(0),
-          glm::dvec3(100));
-  return s;
-}
-
 MeshOptions ShadowMesh() {
   MeshOptions o;
   o.patch_size = 0.5;

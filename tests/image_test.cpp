@@ -418,7 +418,7 @@ TEST_F(ImageFiles, WriteImagePpmAndPng) {
 
   const std::string ppm = dir_ + "/a.ppm";
   std::string err;
-  ASSERT_TRUE(WriteImage(img, 1.0f, ppm, "ppm", &err)) << err;
+  ASSERT_TRUE(WriteImage(img, 1.0f, {ppm}, "ppm", &err)) << err;
   const std::string bytes = ReadAll(ppm);
   const std::string header = "P6\n3 2\n255\n";
   ASSERT_EQ(bytes.size(), header.size() + 3 * 2 * 3);
@@ -429,12 +429,15 @@ TEST_F(ImageFiles, WriteImagePpmAndPng) {
     EXPECT_EQ(uint8_t(bytes[header.size() + i]), expect[i]) << i;
 
   // Exposure 2 brings 0.25 to 0.5.
-  ASSERT_TRUE(WriteImage(img, 2.0f, ppm, "ppm", &err)) << err;
+  ASSERT_TRUE(WriteImage(img, 2.0f, {ppm}, "ppm", &err)) << err;
   EXPECT_EQ(uint8_t(ReadAll(ppm)[header.size() + 9]), 188);
 
   const std::string png = dir_ + "/a.png";
-  ASSERT_TRUE(WriteImage(img, 1.0f, png, "png", &err)) << err;
+  // Two paths: one picture, encoded once.
+  const std::string png2 = dir_ + "/b.png";
+  ASSERT_TRUE(WriteImage(img, 1.0f, {png, png2}, "png", &err)) << err;
   EXPECT_GT(std::filesystem::file_size(png), 0u);
+  EXPECT_EQ(ReadAll(png2), ReadAll(png));
   int w = 0, h = 0, comp = 0;
   unsigned char* data = stbi_load(png.c_str(), &w, &h, &comp, 3);
   ASSERT_NE(data, nullptr);
@@ -444,11 +447,11 @@ TEST_F(ImageFiles, WriteImagePpmAndPng) {
   stbi_image_free(data);
 
   const std::string bad = dir_ + "/missing/a.png";
-  EXPECT_FALSE(WriteImage(img, 1.0f, bad, "png", &err));
+  EXPECT_FALSE(WriteImage(img, 1.0f, {bad}, "png", &err));
   EXPECT_EQ(err.rfind(bad + ": ", 0), 0u) << err;
-  EXPECT_FALSE(WriteImage(img, 1.0f, bad, "ppm", &err));
+  EXPECT_FALSE(WriteImage(img, 1.0f, {bad}, "ppm", &err));
   EXPECT_EQ(err.rfind(bad + ": ", 0), 0u) << err;
-  EXPECT_FALSE(WriteImage(img, 1.0f, dir_ + "/a.jpg", "jpg", &err));
+  EXPECT_FALSE(WriteImage(img, 1.0f, {dir_ + "/a.jpg"}, "jpg", &err));
   EXPECT_NE(err.find("jpg"), std::string::npos) << err;
 }
 

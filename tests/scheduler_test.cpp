@@ -18,7 +18,8 @@ namespace {
 
 class FakeTransport : public Transport {
  public:
-  FakeTransport(const Mesh& mesh, int workers) : mesh_(mesh), hemicube_(32), queue_(workers) {}
+  FakeTransport(const Mesh& mesh, int workers, int resolution = 32)
+      : mesh_(mesh), hemicube_(resolution), queue_(workers) {}
   int Workers() const override { return int(queue_.size()); }
   int Starting() const override { return joined_ ? 0 : int(queue_.size()); }
   std::string Name(int w) const override { return "fake " + std::to_string(w); }
@@ -28,14 +29,24 @@ class FakeTransport : public Transport {
     log_.push_back({w, a.patch});
     sent_.push_back(a);
     max_outstanding_ = std::max(max_outstanding_, queue_[w].size());
+    ++unsent_;
   }
-  void Divide(const std::vector<int32_t>&) override {}
+  // Sent in Poll, as the worker pool sends: what was given out and not
+  // yet sent when the master divides.
+  void Divide(const std::vector<int32_t>&) override {
+    ++divides_;
+    unsent_at_divide_ += unsent_;
+  }
   double Now() override { return now_ += now_step_; }
-  void Send(std::vector<WorkerEvent>*) override { ++sends_; }
+  void Send(std::vector<WorkerEvent>*) override {
+    ++sends_;
+    unsent_ = 0;
+  }
 
   // Each Poll: the first joins everyone; later ones answer one assignment
   // of each worker in turn (round robin), as workers of equal speed would.
   void Poll(double, std::vector<WorkerEvent>* events) override {
+    unsent_ = 0;
     now_ += 1e-3;
     if (!joined_) {
       joined_ = true;
@@ -52,32 +63,35 @@ class FakeTransport : public Transport {
       queue_[w].clear();
       events->push_back({WorkerEvent::kLost, w, {}, "killed"});
     }
+    // Everything computed meanwhile, read at once: after a long step
+    // (burst_), or always, from workers far quicker than the master.
+    if (burst_ || answer_all_) {
+      burst_ = false;
+      for (int w = 0; w < Workers(); ++w)
+        while (!lost_.count(w) && !silent_.count(w) && !queue_[w].empty()) Answer(w, events);
+      return;
+    }
+    if (quiet_every_ > 0 && polls_ % quiet_every_ == 0) return;
     for (int i = 0; i < Workers(); ++i) {
       const int w = (next_ + i) % Workers();
       if (lost_.count(w) || silent_.count(w) || queue_[w].empty()) continue;
-      if (answer_all_) {  // and the rest at once: workers far quicker than the master
-        for (const proto::Assignment& a : queue_[w]) events->push_back(Answer(a, w));
-        queue_[w].clear();
-        continue;
-      }
       next_ = w + 1;
-      const proto::Assignment a = queue_[w].front();
-      queue_[w].erase(queue_[w].begin());
-      const WorkerEvent ev = Answer(a, w);
-      events->push_back(ev);
-      if (duplicate_at_ == polls_) events->push_back(ev);  // a late copy
+      Answer(w, events);
+      if (duplicate_at_ == polls_) events->push_back(events->back());  // a late copy
       return;
     }
   }
-
-  WorkerEvent Answer(const proto::Assignment& a, int w) {
+  // Worker w's column for its oldest assignment.
+  void Answer(int w, std::vector<WorkerEvent>* events) {
+    const proto::Assignment a = queue_[w].front();
+    queue_[w].erase(queue_[w].begin());
     WorkerEvent ev{WorkerEvent::kColumn, w, {}, ""};
     ev.column.patch = a.patch;
     ev.column.k = a.k;
     // Quick workers say so: their queues deepen to cover the round trip.
     ev.column.compute_s = answer_all_ ? 1e-6 : 1e-3;
     hemicube_.Column(mesh_, a.patch, a.Group(), 0.0, &ev.column.ff);
-    return ev;
+    events->push_back(std::move(ev));
   }
 
   const Mesh& mesh_;
@@ -93,6 +107,11 @@ class FakeTransport : public Transport {
   bool answer_all_ = false;  // each Poll answers every assignment
   size_t max_outstanding_ = 0;
   long polls_ = 0, sends_ = 0;
+  long unsent_ = 0, divides_ = 0, unsent_at_divide_ = 0;
+  // Every so many polls bring nothing (the workers still computing):
+  // then the columns waiting are shot and the master may divide.
+  long quiet_every_ = 0;
+  bool burst_ = false;  // the next Poll answers every assignment (after a long step)
   int next_ = 0;
   double now_ = 0;
   double now_step_ = 0;  // Now() moves on this much at every call
@@ -438,6 +457,61 @@ TEST(Scheduler, NoWorkerAtAll) {
   RunResult r = RunMaster(&m, Opts(), &solver, nullptr, &t, nullptr, nullptr);
   EXPECT_EQ(r.status, RunStatus::kNoWorkers);
   EXPECT_EQ(r.shots, 0);
+}
+
+// The master's own long steps (a division pass, a wave's picture) come
+// after the work given out has gone to the workers: with the transport
+// sending in Poll, that work used to wait until the step was over, and
+// the workers with it.
+TEST(Scheduler, WorkGoesOutBeforeAPassOrAPicture) {
+  MeshOptions mo;
+  mo.patch_size = 0.25;
+  Mesh m = MakeMesh(ShadowScene(), mo);
+  Solver solver(m, true);
+  Subdivider sub(&m, SubdivideOptions());
+  FakeTransport t(m, 2, 128);
+  t.quiet_every_ = 5;  // 3 or 4: the fake never gave work just before a pass
+  std::vector<long> unsent_at_picture;
+  RunOptions o = Opts();
+  o.resolution = 128;
+  o.wave_end = [&](int) { unsent_at_picture.push_back(t.unsent_); };
+  const RunResult r = RunMaster(&m, o, &solver, &sub, &t, nullptr, nullptr);
+  ASSERT_EQ(r.status, RunStatus::kConverged);
+  ASSERT_GT(t.divides_, 0) << r.shots << " shots, " << r.passes << " passes, status " << int(r.status);
+  ASSERT_GT(r.waves, 1);
+  EXPECT_EQ(t.unsent_at_divide_, 0);
+  EXPECT_EQ(unsent_at_picture, std::vector<long>(size_t(r.waves - 1), 0));
+}
+
+// Idle accounting: a picture that takes the master a second leaves both
+// workers idle for about that second (their queues hold a few
+// milliseconds of work), counted as the picture's; pictures that take no
+// time leave none.
+TEST(Scheduler, IdleWorkersAreCountedByWhatTheMasterDid) {
+  for (const double picture_s : {1.0, 0.0}) {
+    MeshOptions mo;
+    mo.patch_size = 0.25;
+    Mesh m = MakeMesh(ShadowScene(), mo);
+    Solver solver(m, true);
+    Subdivider sub(&m, SubdivideOptions());
+    FakeTransport t(m, 2, 128);
+    t.quiet_every_ = 3;
+    RunOptions o = Opts();
+    o.resolution = 128;
+    o.wave_end = [&](int) {
+      t.now_ += picture_s;
+      t.burst_ = true;
+    };
+    const RunResult r = RunMaster(&m, o, &solver, &sub, &t, nullptr, nullptr);
+    ASSERT_EQ(r.status, RunStatus::kConverged);
+    ASSERT_GT(r.waves, 1);
+    const double pictures = 2 * picture_s * (r.waves - 1);  // worker-seconds
+    EXPECT_GE(r.idle.picture, 0.97 * pictures);
+    EXPECT_LE(r.idle.picture, pictures);
+    EXPECT_LT(r.idle.Sum() - r.idle.picture, 0.05)
+        << "pass " << r.idle.pass << ", dry " << r.idle.dry << ", other " << r.idle.other
+        << ", end " << r.idle.end;
+  }
 }
 
 }  // namespace

@@ -331,21 +331,6 @@ TEST(Solver, NoiseIsAboutTheSpreadOfTurnedHemicubes) {
   }
 }
 
-// A small light (0.04 across, at height 2), a square occluder under it
-// (x, y in 0.3..0.7 at height 1, both sides) and a floor (face 0): a sharp
-// shadow whose edge on the floor is at x or y = 0.5 ± 0.4.
-Scene ShadowScene() {
-  Scene s = EmptyScene();
-  AddFace(&s, {{-1, -1, 0}, {2, -1, 0}, {2, 2, 0}, {-1, 2, 0}}, glm::dvec3(0.6), glm::dvec3(0));
-  AddFace(&s, {{0.3, 0.3, 1}, {0.3, 0.7, 1}, {0.7, 0.7, 1}, {0.7, 0.3, 1}}, glm::dvec3(0.5),
-          glm::dvec3(0));  // faces down
-  AddFace(&s, {{0.3, 0.3, 1.001}, {0.7, 0.3, 1.001}, {0.7, 0.7, 1.001}, {0.3, 0.7, 1.001}},
-          glm::dvec3(0.5), glm::dvec3(0));  // faces up, to the light
-  AddFace(&s, {{0.48, 0.48, 2}, {0.48, 0.52, 2}, {0.52, 0.52, 2}, {0.52, 0.48, 2}}, glm::dvec3(0),
-          glm::dvec3(100));  // the light, facing down
-  return s;
-}
-
 // The shadow's floor elements are 1/16 of their distance from the light
 // across: about 4 of its pixels at R 64, where one shot counts them ±25%
 // and even the shadow's full edge is at the limit of what the dividing

@@ -43,6 +43,21 @@ inline Scene EmptyScene() {
 
 // The inside of the box [0,size]^3, every face facing in. kd/ke per face
 // (six entries) or one for all.
+// A small light (0.04 across, at height 2) over a square occluder (x, y
+// in 0.3..0.7 at height 1, both sides) and a floor (face 0): a sharp shadow whose edge on the floor
+// is at x or y = 0.5 ± 0.4, so that a run divides and goes through waves.
+inline Scene ShadowScene() {
+  Scene s = EmptyScene();
+  AddFace(&s, {{-1, -1, 0}, {2, -1, 0}, {2, 2, 0}, {-1, 2, 0}}, glm::dvec3(0.6), glm::dvec3(0));
+  AddFace(&s, {{0.3, 0.3, 1}, {0.3, 0.7, 1}, {0.7, 0.7, 1}, {0.7, 0.3, 1}}, glm::dvec3(0.5),
+          glm::dvec3(0));  // faces down
+  AddFace(&s, {{0.3, 0.3, 1.001}, {0.7, 0.3, 1.001}, {0.7, 0.7, 1.001}, {0.3, 0.7, 1.001}},
+          glm::dvec3(0.5), glm::dvec3(0));  // faces up, to the light
+  AddFace(&s, {{0.48, 0.48, 2}, {0.48, 0.52, 2}, {0.52, 0.52, 2}, {0.52, 0.48, 2}}, glm::dvec3(0),
+          glm::dvec3(100));  // the light, facing down
+  return s;
+}
+
 inline Scene Box(double size, std::vector<glm::dvec3> kd, std::vector<glm::dvec3> ke) {
   Scene s = EmptyScene();
   const double L = size;
