@@ -145,8 +145,15 @@ Trace Record(const SceneData& s, const RunOptions& o, Transport* t) {
                      if (warning) std::fprintf(stderr, "radiosity-parallel: %s\n", line.c_str());
                    });
   tr.stalled = tr.r.shots < o.max_shots;
-  if (tr.r.status != RunStatus::kLimit || tr.r.stale || tr.r.lost || tr.r.fell_back)
-    Die(s.name + ": a run went wrong: " + tr.r.why + ", " + std::to_string(tr.r.stale) + " stale, " + std::to_string(tr.r.lost) + " lost");
+  // A column is stale only for a patch taken back from a worker that held
+  // it too long (scheduler.cpp, Reclaim): one at most for each.
+  long reclaimed = 0;
+  for (const RunResult::Worker& w : tr.r.workers) reclaimed += w.reclaimed;
+  if (tr.r.status != RunStatus::kLimit || tr.r.stale > reclaimed || tr.r.lost || tr.r.fell_back)
+    Die(s.name + ": a run went wrong: " + tr.r.why + ", " + std::to_string(tr.r.stale) +
+        " stale (" + std::to_string(reclaimed) + " taken back), " + std::to_string(tr.r.lost) +
+        " lost");
+
   tr.b = solver.radiosity();
   return tr;
 }
