@@ -214,7 +214,7 @@ class Scheduler {
     int alive = 0;
     if (Pipelined())
       for (const Slot& s : slots_) alive += s.alive;
-    sample_({Elapsed(), solver_->shots(), wave_, mesh_.LeafCount(), unshot_, alive});
+    sample_({Elapsed(), solver_->shots(), wave_, mesh_.LeafCount(), unshot_, alive, last_patch_, last_k_});
   }
 
   const Mesh& mesh_;
@@ -248,6 +248,7 @@ class Scheduler {
   std::vector<int32_t> changed_;      // Refine's scratch
   std::deque<int> pending_;           // RunState::pending of a resumed run
   double last_checkpoint_ = 0;        // on t_'s clock
+  int last_patch_ = -1, last_k_ = 0;  // the last shot (Sample)
   double looked_ = 0;                 // t_'s clock when the last Poll returned
   double busy_ = 0;                   // and from then to the next Poll
   RunResult r_;
@@ -425,15 +426,20 @@ void Scheduler::Measure(Slot* s, const Slot::Sent& sent, const proto::Column& c)
 // differ by up to twice for a while.)
 void Scheduler::Deferrals() {
   skip_.assign(slots_.size(), 0);
-  double quickest = HUGE_VAL, rate = 0;
+  double quickest = HUGE_VAL, rate = 0, steadiest = HUGE_VAL;
   for (const Slot& s : slots_) {
     if (!s.alive || s.Turnaround() <= 0) continue;
     quickest = std::min(quickest, s.Turnaround());
+    steadiest = std::min(steadiest, s.Service());
     rate += 1 / s.Service();
   }
+  // Slow is also slower to deliver columns, not only held longer: where
+  // every worker waits on one shared link (100 simulated workers on
+  // 10 Mbit/s) the deeper queues alone made turnarounds differ fourfold,
+  // and patches taken back from them made a quarter of the columns stale.
   for (size_t w = 0; w < slots_.size(); ++w) {
     const Slot& s = slots_[w];
-    if (!s.alive || s.Turnaround() <= 4 * quickest) continue;
+    if (!s.alive || s.Turnaround() <= 4 * quickest || s.Service() <= 4 * steadiest) continue;
     const double others = rate - 1 / s.Service();
     skip_[w] = std::min(long(mesh_.patches.size()),
                         long(others * (s.Turnaround() - quickest)));
@@ -862,6 +868,8 @@ void Scheduler::ShootNext() {
   if (from) --from->waiting;
   solver_->Shoot(c.patch, c.ff);
   solver_->Release(c.patch);
+  last_patch_ = c.patch;
+  last_k_ = c.k;
   t_->Recycle(std::move(c.ff));
   ++r_.columns;
   unshot_ = solver_->UnshotFraction();

@@ -68,6 +68,7 @@ struct Sample {
   long elements;
   double unshot;
   int workers = 0;  // alive; 0 when the master computes the columns itself
+  int last_patch = -1, last_k = 0;  // the shot just before (-1: none yet)
 };
 
 enum class RunStatus { kConverged, kLimit, kStopped, kNotConverged, kNoWorkers };

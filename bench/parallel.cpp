@@ -88,31 +88,23 @@ struct Trace {
   double Until(size_t k) const { return shot_at[k - 1] - shot_at[0]; }
 };
 
-// Passes everything through, noting every column: the scheduler shoots
-// columns in the order they arrive (none is stale: checked).
+// Passes everything through; the clock of the samples.
 class Recorder : public Transport {
  public:
-  Recorder(Transport* t, Trace* trace) : t_(t), trace_(trace) {}
+  explicit Recorder(Transport* t) : t_(t) {}
   int Workers() const override { return t_->Workers(); }
   int Starting() const override { return t_->Starting(); }
   std::string Name(int w) const override { return t_->Name(w); }
   void Assign(int w, const proto::Assignment& a) override { t_->Assign(w, a); }
   void Divide(const std::vector<int32_t>& e) override { t_->Divide(e); }
-  void Poll(double timeout, std::vector<WorkerEvent>* events) override {
-    const size_t before = events->size();
-    t_->Poll(timeout, events);
-    for (size_t i = before; i < events->size(); ++i) {
-      const WorkerEvent& ev = (*events)[i];
-      if (ev.kind == WorkerEvent::kColumn) trace_->shot.push_back({ev.column.patch, ev.column.k});
-    }
-  }
+  void Send(std::vector<WorkerEvent>* events) override { t_->Send(events); }
+  void Poll(double timeout, std::vector<WorkerEvent>* events) override { t_->Poll(timeout, events); }
   double Now() override { return t_->Now(); }
   uint64_t BytesSent() const override { return t_->BytesSent(); }
   uint64_t BytesReceived() const override { return t_->BytesReceived(); }
 
  private:
   Transport* t_;
-  Trace* trace_;
 };
 
 // The longest a run may take (the slowest, at 10 Mbit/s, take ~20 s of
@@ -132,14 +124,17 @@ RunOptions Options(int res, long shots) {
 
 Trace Record(const SceneData& s, const RunOptions& o, Transport* t) {
   Trace tr;
-  Recorder rec(t, &tr);
+  Recorder rec(t);
   // The master's own copy: RunMaster may divide it (not here: these runs
   // measure the scheduler on the mesh as built).
   Mesh mesh = s.mesh;
   Solver solver(mesh, o.overshoot);
   tr.r = RunMaster(&mesh, o, &solver, nullptr, &rec,
                    [&](const Sample& smp) {
-                     if (smp.shots > long(tr.shot_at.size())) tr.shot_at.push_back(rec.Now());
+                     if (smp.shots > long(tr.shot_at.size())) {
+                       tr.shot_at.push_back(rec.Now());
+                       tr.shot.push_back({smp.last_patch, smp.last_k});
+                     }
                    },
                    [](const std::string& line, bool warning) {
                      if (warning) std::fprintf(stderr, "radiosity-parallel: %s\n", line.c_str());
