@@ -88,25 +88,6 @@ struct Trace {
   double Until(size_t k) const { return shot_at[k - 1] - shot_at[0]; }
 };
 
-// Passes everything through; the clock of the samples.
-class Recorder : public Transport {
- public:
-  explicit Recorder(Transport* t) : t_(t) {}
-  int Workers() const override { return t_->Workers(); }
-  int Starting() const override { return t_->Starting(); }
-  std::string Name(int w) const override { return t_->Name(w); }
-  void Assign(int w, const proto::Assignment& a) override { t_->Assign(w, a); }
-  void Divide(const std::vector<int32_t>& e) override { t_->Divide(e); }
-  void Send(std::vector<WorkerEvent>* events) override { t_->Send(events); }
-  void Poll(double timeout, std::vector<WorkerEvent>* events) override { t_->Poll(timeout, events); }
-  double Now() override { return t_->Now(); }
-  uint64_t BytesSent() const override { return t_->BytesSent(); }
-  uint64_t BytesReceived() const override { return t_->BytesReceived(); }
-
- private:
-  Transport* t_;
-};
-
 // The longest a run may take (the slowest, at 10 Mbit/s, take ~20 s of
 // virtual time): a run whose scheduler stops sending work would otherwise
 // wait for columns for ever.
@@ -124,15 +105,14 @@ RunOptions Options(int res, long shots) {
 
 Trace Record(const SceneData& s, const RunOptions& o, Transport* t) {
   Trace tr;
-  Recorder rec(t);
   // The master's own copy: RunMaster may divide it (not here: these runs
   // measure the scheduler on the mesh as built).
   Mesh mesh = s.mesh;
   Solver solver(mesh, o.overshoot);
-  tr.r = RunMaster(&mesh, o, &solver, nullptr, &rec,
+  tr.r = RunMaster(&mesh, o, &solver, nullptr, t,
                    [&](const Sample& smp) {
                      if (smp.shots > long(tr.shot_at.size())) {
-                       tr.shot_at.push_back(rec.Now());
+                       tr.shot_at.push_back(t->Now());
                        tr.shot.push_back({smp.last_patch, smp.last_k});
                      }
                    },
