@@ -168,7 +168,7 @@ class Scheduler {
   bool FallBack();
   void Distribute();
   void Fill();
-  void Send();
+  void Assign();
   bool Exhausted();
   void ShootNext();
   void Subdivide();
@@ -264,7 +264,7 @@ class Scheduler {
   std::deque<Span> spans_;
   double dry_from_ = -1;              // nothing to select since; -1: not dry
   std::vector<int> unsent_;           // slots given work since the last Poll
-  double polled_ = 0;                 // when the last Poll returned (Handle: the one before)
+  double polled_ = 0;                 // when the Poll before the last returned (Handle's bound)
   void Busy(Cause cause, double t0, double t1);
   void CountIdle(double from, double to);
 };
@@ -568,11 +568,11 @@ void Scheduler::Handle(WorkerEvent& ev) {
 // Cyclic fill (paper §4.1): when any queue is under its low mark, go round
 // the workers not yet at their high mark, one patch each per turn, always
 // the patch with the most power to shoot, so that the first lights of a
-// run go to different workers. Then send what each pipeline has room for.
+// run go to different workers. Then assign what each pipeline has room for.
 void Scheduler::Distribute() {
   const double t0 = MonotonicSeconds();
   Fill();
-  Send();
+  Assign();
   // A queue still under its low mark: nothing was left to select.
   bool dry = false;
   for (const Slot& s : slots_) dry |= s.alive && s.Queued() < size_t(s.low);
@@ -643,8 +643,9 @@ void Scheduler::Fill() {
   }
 }
 
-// Sends what each pipeline has room for.
-void Scheduler::Send() {
+// Assigns what each pipeline has room for (the transport sends it at the
+// next Poll or Transmit).
+void Scheduler::Assign() {
   for (size_t w = 0; w < slots_.size(); ++w) {
     Slot& s = slots_[w];
     while (s.alive && !s.prepared.empty() && s.sent.size() < size_t(s.depth)) {
@@ -819,11 +820,10 @@ void Scheduler::Poll(double timeout) {
   MarkSent();
   busy_ = t_->Now() - looked_;
   t_->Poll(timeout, &events_);
-  const double read = t_->Now();
-  looked_ = read;
+  polled_ = looked_;
+  looked_ = t_->Now();
   timer_.Polled(MonotonicSeconds() - t0, timeout > 0);
   for (WorkerEvent& ev : events_) Handle(ev);
-  polled_ = read;
 }
 
 // No worker is alive or on its way and no column waits: the fallback
