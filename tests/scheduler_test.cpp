@@ -463,19 +463,34 @@ TEST(Scheduler, NoWorkerAtAll) {
 // after the work given out has gone to the workers: with the transport
 // sending in Poll, that work used to wait until the step was over, and
 // the workers with it.
+// Two fake workers on the shadow scene at R 128, dividing, in waves: the
+// runs of the two tests below.
+struct DividingRun {
+  static MeshOptions Patches() {
+    MeshOptions mo;
+    mo.patch_size = 0.25;
+    return mo;
+  }
+  static RunOptions Options() {
+    RunOptions o = Opts();
+    o.resolution = 128;
+    return o;
+  }
+  RunResult Run() { return RunMaster(&m, o, &solver, &sub, &t, nullptr, nullptr); }
+  Mesh m = MakeMesh(ShadowScene(), Patches());
+  Solver solver{m, true};
+  Subdivider sub{&m, SubdivideOptions()};
+  FakeTransport t{m, 2, 128};
+  RunOptions o = Options();
+};
+
 TEST(Scheduler, WorkGoesOutBeforeAPassOrAPicture) {
-  MeshOptions mo;
-  mo.patch_size = 0.25;
-  Mesh m = MakeMesh(ShadowScene(), mo);
-  Solver solver(m, true);
-  Subdivider sub(&m, SubdivideOptions());
-  FakeTransport t(m, 2, 128);
+  DividingRun run;
+  FakeTransport& t = run.t;
   t.quiet_every_ = 5;  // 3 or 4: the fake never gave work just before a pass
   std::vector<long> unsent_at_picture;
-  RunOptions o = Opts();
-  o.resolution = 128;
-  o.wave_end = [&](int) { unsent_at_picture.push_back(t.unsent_); };
-  const RunResult r = RunMaster(&m, o, &solver, &sub, &t, nullptr, nullptr);
+  run.o.wave_end = [&](int) { unsent_at_picture.push_back(t.unsent_); };
+  const RunResult r = run.Run();
   ASSERT_EQ(r.status, RunStatus::kConverged);
   ASSERT_GT(t.divides_, 0) << r.shots << " shots, " << r.passes << " passes, status " << int(r.status);
   ASSERT_GT(r.waves, 1);
@@ -489,20 +504,14 @@ TEST(Scheduler, WorkGoesOutBeforeAPassOrAPicture) {
 // time leave none.
 TEST(Scheduler, IdleWorkersAreCountedByWhatTheMasterDid) {
   for (const double picture_s : {1.0, 0.0}) {
-    MeshOptions mo;
-    mo.patch_size = 0.25;
-    Mesh m = MakeMesh(ShadowScene(), mo);
-    Solver solver(m, true);
-    Subdivider sub(&m, SubdivideOptions());
-    FakeTransport t(m, 2, 128);
+    DividingRun run;
+    FakeTransport& t = run.t;
     t.quiet_every_ = 3;
-    RunOptions o = Opts();
-    o.resolution = 128;
-    o.wave_end = [&](int) {
+    run.o.wave_end = [&](int) {
       t.now_ += picture_s;
       t.burst_ = true;
     };
-    const RunResult r = RunMaster(&m, o, &solver, &sub, &t, nullptr, nullptr);
+    const RunResult r = run.Run();
     ASSERT_EQ(r.status, RunStatus::kConverged);
     ASSERT_GT(r.waves, 1);
     const double pictures = 2 * picture_s * (r.waves - 1);  // worker-seconds
