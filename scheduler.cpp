@@ -8,7 +8,9 @@
 
 #include "clock.h"
 #include "groups.h"
+#include "idle.h"
 #include "inprocess.h"
+#include "queues.h"
 
 namespace {
 
@@ -62,18 +64,9 @@ struct Slot {
   };
   std::deque<Sent> sent;
   std::deque<int> prepared;
-  int depth = 2;          // sent and unanswered, at most
-  int high = 3, low = 2;  // watermarks on Queued()
+  Pace pace;               // its queue's sizes and what they are set from
   long columns = 0;
-  int waiting = 0;        // its columns received and not yet shot
-  // What its queue is set from (Scheduler::Measure), in seconds, smoothed
-  // (double: differences of clock readings). 0: not measured yet.
-  double column_s = 0;     // compute time per column
-  double wire_s = 0;       // a column's time on the wire (its work's way
-                           // out, its own way back), not counting a wait
-                           // behind its own earlier columns on a slow link
-  double interval_s = 0;   // between two of its columns while it held more
-  double last_arrival = -1;
+  int waiting = 0;         // its columns received and not yet shot
   long retry_at = 0;       // shots: no patch far enough down for it until then
   RunResult::Worker report;
   double free_at = 0;     // when it was done with the columns read so far (idle accounting)
@@ -85,12 +78,7 @@ struct Slot {
   // simulated workers on the room at R 64 once received 1175 columns for
   // 500 shots at 108 us a shot instead of 30.
   size_t Queued() const { return Owned() + size_t(waiting); }
-  // Seconds between its columns as it runs: the slower of its CPU and its
-  // link.
-  double Service() const { return std::max(column_s, interval_s); }
-  // How long a patch sent to it is held: behind a full pipeline, then on
-  // the wire. 0: not measured yet.
-  double Turnaround() const { return column_s > 0 ? wire_s + depth * Service() : 0; }
+  bool Low() const { return Queued() < size_t(pace.low); }
 };
 
 // The master's parts are timed with the monotonic clock: the thread's CPU
@@ -185,20 +173,18 @@ class Scheduler {
     return false;
   }
   bool Pipelined() const { return !t_->Caps().computes_in_poll; }
-  void Sizes(Slot* s, int workers) const;
-  void Measure(Slot* s, const Slot::Sent& sent, const proto::Column& c);
+  void Sizes(Slot* s);
   void Deferrals();
   void Reclaim();
-  int PatchBelow(long skip);
   void Handle(WorkerEvent& ev);
   void Release(Slot* s);
   // Its RunResult::Worker into r_ (a worker that joined, once).
   void Report(Slot* s) {
     if (s->report.name.empty()) return;
-    s->report.depth = s->depth;
-    s->report.column_s = s->column_s;
-    s->report.wire_s = s->wire_s;
-    s->report.interval_s = s->interval_s;
+    s->report.depth = s->pace.depth;
+    s->report.column_s = s->pace.column_s;
+    s->report.wire_s = s->pace.wire_s;
+    s->report.interval_s = s->pace.interval_s;
     r_.workers.push_back(std::move(s->report));
     s->report.name.clear();
   }
@@ -235,6 +221,7 @@ class Scheduler {
   std::deque<Ready> ready_;  // columns received, to be shot in order
   std::vector<WorkerEvent> events_;   // of the last Poll
   std::vector<long> skip_;            // per slot, Deferrals()'
+  std::vector<const Pace*> paces_;    // Deferrals()' scratch
   std::vector<int> held_;             // PatchBelow's scratch
   TurnTimer timer_;
   long log_every_ = 1;                // shots between samples
@@ -253,52 +240,20 @@ class Scheduler {
   double busy_ = 0;                   // and from then to the next Poll
   RunResult r_;
 
-  // Idle accounting (RunResult::idle): what the master did when, as
-  // disjoint spans in time order, kept back to the oldest free_at of a
-  // live worker (no gap starts earlier).
-  enum Cause { kPicture, kPass, kDry };
-  struct Span {
-    double t0, t1;
-    Cause cause;
-  };
-  std::deque<Span> spans_;
-  double dry_from_ = -1;              // nothing to select since; -1: not dry
+  IdleAccount idle_;                  // RunResult::idle
   std::vector<int> unsent_;           // slots given work since the last Poll
   double polled_ = 0;                 // when the Poll before the last returned (Handle's bound)
-  void Busy(Cause cause, double t0, double t1);
   void CountIdle(double from, double to);
 };
 
-// A step of the master's own (a picture, a pass) from t0 to t1: a dry
-// span open meanwhile is cut around it, so that spans never overlap.
-void Scheduler::Busy(Cause cause, double t0, double t1) {
-  if (dry_from_ >= 0) {
-    if (t0 > dry_from_) spans_.push_back({dry_from_, t0, kDry});
-    dry_from_ = t1;
-  }
-  spans_.push_back({t0, t1, cause});
-}
-
-// A worker idle from `from` to `to`, counted by the spans it overlaps; the
-// rest is `other`. Spans no gap can reach any more are dropped.
+// A worker idle from `from` to `to`; no gap starts before the oldest
+// free_at of a live worker.
 void Scheduler::CountIdle(double from, double to) {
   if (!Pipelined()) return;
   double oldest = from;
   for (const Slot& s : slots_)
     if (s.alive) oldest = std::min(oldest, s.free_at);
-  while (!spans_.empty() && spans_.front().t1 <= oldest) spans_.pop_front();
-  if (to <= from) return;
-  double rest = to - from;
-  auto add = [&](Cause cause, double t0, double t1) {
-    const double o = std::min(to, t1) - std::max(from, t0);
-    if (o <= 0) return;
-    rest -= o;
-    (cause == kPicture ? r_.idle.picture : cause == kPass ? r_.idle.pass : r_.idle.dry) += o;
-  };
-  if (dry_from_ >= 0) add(kDry, dry_from_, to);
-  for (auto it = spans_.rbegin(); it != spans_.rend() && it->t1 > from; ++it)
-    add(it->cause, it->t0, it->t1);
-  r_.idle.other += std::max(0.0, rest);
+  idle_.Count(from, to, oldest);
 }
 
 // The next patch to hand out: first those a resumed run's checkpoint had
@@ -336,114 +291,26 @@ RunState Scheduler::State() {
   return s;
 }
 
-// Queue sizes (paper §4.1: "3-10 patches according to network size"),
-// from what Measure() keeps per worker. depth covers the round trip:
-// while one column travels back and the next assignment travels out, the
-// worker computes the ones it holds, one per Service() time; on a link
-// slower than the worker's CPU the link paces it, and more than the round
-// trip's worth would only wait in its buffers, held from the other
-// workers. Up to kMaxDepth: a link of 25 ms each way needs some 32 in flight
-// to keep a worker of 1.6 ms a column busy (the paper's 10 kept it busy
-// a third of the time). high adds enough prepared patches to refill
-// that pipeline twice, more with many workers (the master then takes
-// longer to come round to each).
-constexpr int kMaxDepth = 32, kMaxHigh = 64;  // kMaxHigh: --queue's bound
-
-void Scheduler::Sizes(Slot* s, int workers) const {
-  if (!Pipelined()) {  // select right before computing: sequential order
-    s->depth = s->high = s->low = 1;
-    return;
-  }
-  if (s->column_s > 0) {
-    // Little's law: in flight = round trip / service time. The wire's
-    // samples leave out a column that waited for a slow link (Measure),
-    // so where the link paces the worker the trip counts its transfer
-    // (the time between columns) besides. (1.25: a worker sharing a busy
-    // core also takes longer in wall time than its CPU time says.)
-    const bool link_paced = s->interval_s > 1.25 * s->column_s;
-    const double trip = s->column_s + s->wire_s + (link_paced ? s->interval_s : 0);
-    s->depth = std::clamp(int(std::ceil(trip / s->Service())), 2, kMaxDepth);
-  }
-  if (opts_.queue > 0) {
-    s->high = opts_.queue;
-    s->depth = std::min(s->depth, s->high);
-  } else {
-    s->high = std::clamp(2 * s->depth + workers / 32, 3, kMaxHigh);
-  }
-  s->low = std::max(1, (s->high + 1) / 2);
+// Queue sizes (Pace::Size) and their range in its report.
+void Scheduler::Sizes(Slot* s) {
+  Pace& q = s->pace;
+  if (!Pipelined())  // select right before computing: sequential order
+    q.depth = q.high = q.low = 1;
+  else
+    q.Size(t_->Workers(), opts_.queue);
   RunResult::Worker& r = s->report;
-  r.depth_min = r.depth_min ? std::min(r.depth_min, s->depth) : s->depth;
-  r.depth_max = std::max(r.depth_max, s->depth);
-  r.high_max = std::max(r.high_max, s->high);
+  r.depth_min = r.depth_min ? std::min(r.depth_min, q.depth) : q.depth;
+  r.depth_max = std::max(r.depth_max, q.depth);
+  r.high_max = std::max(r.high_max, q.high);
 }
 
-// A column's times, smoothed per worker (a quarter each new one: a link
-// that slows shows within a few columns, one late column on a loaded
-// machine does not swing the queue). Its time on the wire is the round
-// trip less its wait and compute time in the worker (sent + wait +
-// compute: when it was ready, on the master's clock): its work's way out
-// and its own way back. Only a column that was ready after the one
-// before it arrived counts: one ready before then waited for that one to
-// get through a link slower than the worker's CPU, a wait that grows
-// with the queue (taken for a longer wire, it deepened the queue, which
-// queued more there, and so on up to the bound: one sample of the round
-// trip put 10 in flight to a worker behind pv -L 50k); what such a link
-// takes is the time between its columns. That time is the worker's
-// service time only when it held this one's work before the other
-// arrived; otherwise it waited for work.
-void Scheduler::Measure(Slot* s, const Slot::Sent& sent, const proto::Column& c) {
-  const double now = t_->Now();
-  const double ready = sent.at + c.wait_s + c.compute_s;
-  // (ready is early by the work's way out: about half the wire.)
-  const bool queued = s->last_arrival > ready + s->wire_s / 2;
-  const bool backlogged = s->last_arrival > sent.at;
-  const double interval = now - s->last_arrival;
-  s->last_arrival = now;
-  // The first column also builds the hemicube's buffers: not a sample.
-  if (s->columns == 0 || c.compute_s <= 0) return;
-  auto smooth = [](double* v, double x) { *v = *v > 0 ? *v + (x - *v) / 4 : x; };
-  smooth(&s->column_s, c.compute_s);
-  // A column seen after the master was busy for longer than the column
-  // took (a division pass, a wave's picture) may have waited for it
-  // unread: the master's time, not the link's (one 100 ms picture gave a
-  // local worker 19 in flight).
-  if (busy_ > c.compute_s) return;
-  if (!queued) smooth(&s->wire_s, std::max(0.0, now - ready));
-  if (backlogged) smooth(&s->interval_s, interval);
-}
-
-// Patches deferred per worker (skip_): a patch given to a worker comes
-// back after its Turnaround(); the other workers shoot about
-// Σ 1/Service() patches a second meanwhile. A worker that holds patches
-// more than four times as long as the quickest is given the patch as many
-// places down the order as the others shoot in the difference, not the
-// one with the most power: that one they shoot sooner. Otherwise a worker
-// behind a slow link took the lights at the start of every wave and the
-// run waited for them (the room beside a worker behind 1 Mbit/s in the
-// simulation: 5,860 shots to converge, 6.16 s, against 3,074 and 3.29 s
-// alone; bench/throttle.sh). Equal workers defer nothing, as in the
-// paper's cyclic fill. (Four: equal local workers on two busy cores
-// differ by up to twice for a while.)
+// Patches deferred per worker (skip_, queues.cpp): a worker that holds
+// patches far longer than the quickest is given the patch some places
+// down the order.
 void Scheduler::Deferrals() {
-  skip_.assign(slots_.size(), 0);
-  double quickest = HUGE_VAL, rate = 0, steadiest = HUGE_VAL;
-  for (const Slot& s : slots_) {
-    if (!s.alive || s.Turnaround() <= 0) continue;
-    quickest = std::min(quickest, s.Turnaround());
-    steadiest = std::min(steadiest, s.Service());
-    rate += 1 / s.Service();
-  }
-  // Slow is also slower to deliver columns, not only held longer: where
-  // every worker waits on one shared link (100 simulated workers on
-  // 10 Mbit/s) the deeper queues alone made turnarounds differ fourfold,
-  // and patches taken back from them made a quarter of the columns stale.
-  for (size_t w = 0; w < slots_.size(); ++w) {
-    const Slot& s = slots_[w];
-    if (!s.alive || s.Turnaround() <= 4 * quickest || s.Service() <= 4 * steadiest) continue;
-    const double others = rate - 1 / s.Service();
-    skip_[w] = std::min(long(mesh_.patches.size()),
-                        long(others * (s.Turnaround() - quickest)));
-  }
+  paces_.clear();
+  for (const Slot& s : slots_) paces_.push_back(s.alive ? &s.pace : nullptr);
+  ::Deferrals(paces_, long(mesh_.patches.size()), &skip_);
 }
 
 // Deferral keeps the lights from a slow worker, not the light that its
@@ -463,8 +330,8 @@ void Scheduler::Reclaim() {
   double quickest = HUGE_VAL;
   for (size_t w = 0; w < slots_.size(); ++w) {
     Slot& s = slots_[w];
-    if (!s.alive || skip_[w] != 0 || s.Turnaround() <= 0) continue;
-    quickest = std::min(quickest, s.Turnaround());
+    if (!s.alive || skip_[w] != 0 || s.pace.Turnaround() <= 0) continue;
+    quickest = std::min(quickest, s.pace.Turnaround());
     if (!to || s.Queued() < to->Queued()) to = &s;
   }
   if (!to) return;
@@ -475,7 +342,8 @@ void Scheduler::Reclaim() {
     Slot& s = slots_[w];
     if (!s.alive || skip_[w] == 0) continue;
     for (auto it = s.sent.begin(); it != s.sent.end();) {
-      if (it->at + s.Turnaround() <= now + quickest || solver_->PowerToShoot(it->a.patch) <= top) {
+      if (!s.pace.ReturnsAfter(it->at, now, quickest) ||
+          solver_->PowerToShoot(it->a.patch) <= top) {
         ++it;
         continue;
       }
@@ -484,19 +352,6 @@ void Scheduler::Reclaim() {
       it = s.sent.erase(it);
     }
   }
-}
-
-// The patch `skip` places down the shooting order, or -1 when fewer have
-// power to shoot.
-int Scheduler::PatchBelow(long skip) {
-  held_.clear();
-  int p;
-  while ((p = solver_->Select()) >= 0 && long(held_.size()) < skip) {
-    solver_->Take(p);
-    held_.push_back(p);
-  }
-  for (int q : held_) solver_->Release(q);
-  return p;
 }
 
 void Scheduler::Release(Slot* s) {
@@ -515,7 +370,7 @@ void Scheduler::Handle(WorkerEvent& ev) {
       s.free_at = t_->Now();
       ++r_.joined;
       s.report.name = t_->Name(ev.worker);
-      Sizes(&s, t_->Workers());
+      Sizes(&s);
       if (Pipelined()) Note(t_->Name(ev.worker) + ": joined", false);
       return;
     case WorkerEvent::kLost: {
@@ -543,17 +398,11 @@ void Scheduler::Handle(WorkerEvent& ev) {
         return;
       }
       if (Pipelined()) {
-        Measure(&s, *it, c);
-        Sizes(&s, t_->Workers());
+        s.pace.Measure(t_->Now(), it->at, c.wait_s, c.compute_s, s.columns == 0, busy_);
+        Sizes(&s);
       }
-      // The worker took it up when it had it and was done with the one
-      // before, and was done with it after its compute time (CPU: more
-      // wall time when its core is shared), but after the Poll before this
-      // one (which read everything there was) and before now.
       CountIdle(s.free_at, it->out);
-      const double now = t_->Now();
-      s.free_at = std::clamp(std::max(s.free_at, it->out) + c.compute_s,
-                             std::min(polled_, now), now);
+      s.free_at = DoneAt(s.free_at, it->out, c.compute_s, polled_, t_->Now());
       ++s.columns;
       ++s.report.columns;
       ++s.waiting;
@@ -575,12 +424,8 @@ void Scheduler::Distribute() {
   Assign();
   // A queue still under its low mark: nothing was left to select.
   bool dry = false;
-  for (const Slot& s : slots_) dry |= s.alive && s.Queued() < size_t(s.low);
-  if (dry && dry_from_ < 0) dry_from_ = t_->Now();
-  if (!dry && dry_from_ >= 0) {
-    spans_.push_back({dry_from_, t_->Now(), kDry});
-    dry_from_ = -1;
-  }
+  for (const Slot& s : slots_) dry |= s.alive && s.Low();
+  idle_.Dry(dry, t_->Now());
   r_.distribute_s += MonotonicSeconds() - t0;
 }
 
@@ -588,7 +433,7 @@ void Scheduler::Fill() {
   const long shots = solver_->shots();
   bool low = false;
   for (const Slot& s : slots_)
-    low |= s.alive && s.Queued() < size_t(s.low) && shots >= s.retry_at;
+    low |= s.alive && s.Low() && shots >= s.retry_at;
   if (!low) return;
   Deferrals();
   Reclaim();
@@ -596,9 +441,9 @@ void Scheduler::Fill() {
     more = false;
     for (size_t w = 0; w < slots_.size(); ++w) {
       Slot& s = slots_[w];
-      if (!s.alive || s.Queued() >= size_t(s.high) || shots < s.retry_at) continue;
+      if (!s.alive || s.Queued() >= size_t(s.pace.high) || shots < s.retry_at) continue;
       if (skip_[w] > 0 && pending_.empty()) {
-        const int p = PatchBelow(skip_[w]);
+        const int p = PatchBelow(solver_, skip_[w], &held_);
         if (p < 0) {
           // Not that many have power (the start of a wave): nothing for it
           // until the others have shot some; tried again in a while, so
@@ -630,7 +475,7 @@ void Scheduler::Fill() {
   // shoot them sooner.
   for (size_t w = 0; w < slots_.size(); ++w) {
     Slot& s = slots_[w];
-    while (s.alive && s.Queued() < size_t(s.low) && skip_[w] == 0 && shots >= s.retry_at) {
+    while (s.alive && s.Low() && skip_[w] == 0 && shots >= s.retry_at) {
       Slot* from = nullptr;
       for (Slot& t : slots_)
         if (&t != &s && t.alive && !t.prepared.empty() && t.Queued() > s.Queued() + 1 &&
@@ -648,7 +493,7 @@ void Scheduler::Fill() {
 void Scheduler::Assign() {
   for (size_t w = 0; w < slots_.size(); ++w) {
     Slot& s = slots_[w];
-    while (s.alive && !s.prepared.empty() && s.sent.size() < size_t(s.depth)) {
+    while (s.alive && !s.prepared.empty() && s.sent.size() < size_t(s.pace.depth)) {
       const int p = s.prepared.front();
       s.prepared.pop_front();
       // A group goes with its shooter's every assignment, a resent one
@@ -711,7 +556,7 @@ bool Scheduler::Stop() {
 void Scheduler::Subdivide() {
   if (!sub_ || !ready_.empty()) return;
   for (const Slot& s : slots_)
-    if (s.alive && Pipelined() && s.Queued() < size_t(s.low)) return;
+    if (s.alive && Pipelined() && s.Low()) return;
   const long shots_in_wave = solver_->shots() - wave_start_;
   if (!sub_->Due(shots_in_wave) && !sub_->SplitDue(solver_->DirectDone())) return;
   SendNow();
@@ -721,7 +566,7 @@ void Scheduler::Subdivide() {
       Refine(mutable_mesh_, solver_, sub_, shots_in_wave, &changed_, &edits_);
   if (!edits_.empty()) t_->Divide(edits_);
   r_.subdivide_s += MonotonicSeconds() - t0;
-  if (sub_->passes() != passes || !edits_.empty()) Busy(kPass, now, t_->Now());
+  if (sub_->passes() != passes || !edits_.empty()) idle_.Busy(IdleAccount::kPass, now, t_->Now());
   if (over) NextWave();
   unshot_ = solver_->UnshotFraction();
 }
@@ -740,7 +585,7 @@ void Scheduler::NextWave() {
     SendNow();
     const double t0 = t_->Now();
     opts_.wave_end(wave_);
-    Busy(kPicture, t0, t_->Now());
+    idle_.Busy(IdleAccount::kPicture, t0, t_->Now());
   }
   solver_->NewWave();
   for (Slot& s : slots_) {
@@ -876,7 +721,7 @@ void Scheduler::ShootNext() {
   r_.shoot_s += MonotonicSeconds() - t0;
   // The shot made room in its worker's queue: refill it before Poll
   // blocks, as the arrival of the column no longer did.
-  if (from && from->alive && from->Queued() < size_t(from->low)) Distribute();
+  if (from && from->alive && from->Low()) Distribute();
   if (solver_->shots() % log_every_ == 0) Emit();
 }
 
@@ -889,7 +734,8 @@ RunResult Scheduler::Finish() {
   // A worker with nothing left to compute idles to the end.
   const double now = t_->Now();
   for (const Slot& s : slots_)
-    if (s.alive && Pipelined() && s.sent.empty()) r_.idle.end += std::max(0.0, now - s.free_at);
+    if (s.alive && Pipelined() && s.sent.empty()) idle_.End(std::max(0.0, now - s.free_at));
+  r_.idle = idle_.idle();
   Checkpoint();  // before the last sample, which a resumed run then writes
   if (solver_->shots() % log_every_ != 0) Emit();  // the last state, once
   r_.shots = solver_->shots();

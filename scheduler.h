@@ -96,7 +96,7 @@ struct RunResult {
   long passes = 0;          // division passes
   int waves = 1;
   // Per worker that joined (pipelined transports only), as its queue was
-  // set from what the master measured (scheduler.cpp, Slot).
+  // set from what the master measured (queues.h, Pace).
   struct Worker {
     std::string name;
     long columns = 0;
