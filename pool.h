@@ -36,9 +36,17 @@ class Conn {
   virtual bool Buffered() { return false; }
   virtual long Read(char* buf, size_t n) = 0;
   virtual long Write(const char* buf, size_t n) = 0;
-  // Ends the stream and the process behind it; returns how it ended
+  // Ends the stream and the process behind it, unless `kill` giving it
+  // 1 s to exit at the end of its input first; returns how it ended
   // ("exited with status 3", "killed by signal 9"), or "" if unknown.
-  virtual std::string Close(bool kill) = 0;
+  std::string Close(bool kill);
+  // Close's steps, so that many can end at once: the end of the stream
+  // (a worker exits at the end of its input); whether the process behind
+  // it has ended, without waiting (true when there is none); and the end,
+  // killing it if it has not, with how it ended.
+  virtual void Hangup() = 0;
+  virtual bool Ended() = 0;
+  virtual std::string Reap() = 0;
 };
 
 // How a worker process ended with this exit status, as Close() says it.

@@ -77,7 +77,9 @@ class SshConn : public Conn {
   bool Buffered() override { return in_pos_ < in_.size() || eof_; }
   long Read(char* buf, size_t n) override;
   long Write(const char* buf, size_t n) override;
-  std::string Close(bool kill) override;
+  void Hangup() override;
+  bool Ended() override;
+  std::string Reap() override;
 
  private:
   long Fail() {
@@ -162,24 +164,27 @@ long SshConn::Write(const char* buf, size_t n) {
   return rc;
 }
 
-std::string SshConn::Close(bool kill) {
+// The worker exits at the end of its input, and says how.
+void SshConn::Hangup() {
+  if (ch_ && !closed_ && ssh_is_connected(session_->get())) ssh_channel_send_eof(ch_);
+}
+
+bool SshConn::Ended() {
+  auto ended = [&] {
+    return !ch_ || exit_status_ >= 0 || !exit_signal_.empty() || closed_ ||
+           !ssh_is_connected(session_->get());
+  };
+  if (ended()) return true;
+  ssh_channel_get_exit_status(ch_);  // reads what came, without blocking
+  return ended();
+}
+
+std::string SshConn::Reap() {
   if (!ch_) return "";
   ssh_session s = session_->get();
-  if (!kill && ssh_is_connected(s)) {
-    // The worker exits at the end of its input; give it a moment to say how.
-    if (!closed_) ssh_channel_send_eof(ch_);
-    for (int i = 0; i < 100 && exit_status_ < 0 && exit_signal_.empty() && !closed_ &&
-                    ssh_is_connected(s);
-         ++i) {
-      pollfd p{ssh_get_fd(s), POLLIN, 0};
-      ::poll(&p, 1, 10);
-      ssh_channel_get_exit_status(ch_);  // reads what came, without blocking
-    }
-  }
   // sshd passes the signal to the worker's process group: a stopped or
   // hung worker ends too, not only one that reads its input.
-  if (exit_status_ < 0 && exit_signal_.empty() && !closed_ && ssh_is_connected(s))
-    ssh_channel_request_send_signal(ch_, "KILL");
+  if (!Ended()) ssh_channel_request_send_signal(ch_, "KILL");
   ssh_remove_channel_callbacks(ch_, &cb_);
   ssh_channel_close(ch_);
   ssh_channel_free(ch_);

@@ -449,6 +449,73 @@ TEST_F(PoolTest, ShutdownSaysBye) {
   EXPECT_FALSE(p.Next(&type));
 }
 
+// A worker's connection that logs Close's steps and whose process ends
+// at the `ends_at`-th look after its hangup (0: never, until killed).
+class LoggedConn : public Conn {
+ public:
+  LoggedConn(int fd, std::string name, int ends_at, std::vector<std::string>* log)
+      : inner_(SocketConn(fd)), name_(std::move(name)), ends_at_(ends_at), log_(log) {}
+  int fd() const override { return inner_->fd(); }
+  long Read(char* buf, size_t n) override { return inner_->Read(buf, n); }
+  long Write(const char* buf, size_t n) override { return inner_->Write(buf, n); }
+  void Hangup() override {
+    log_->push_back("hangup " + name_);
+    hung_up_ = true;
+    inner_->Hangup();
+  }
+  bool Ended() override { return hung_up_ && ends_at_ > 0 && ++looks_ >= ends_at_; }
+  std::string Reap() override {
+    log_->push_back("reap " + name_ + (Ended() ? "" : ", killed"));
+    return inner_->Reap();
+  }
+
+ private:
+  std::unique_ptr<Conn> inner_;
+  std::string name_;
+  int ends_at_, looks_ = 0;
+  bool hung_up_ = false;
+  std::vector<std::string>* log_;
+};
+
+class ShutdownTest : public PoolTest {
+ protected:
+  ~ShutdownTest() override {
+    for (int fd : peers_) ::close(fd);
+  }
+  // A LoggedConn to the pool, its other end left unread.
+  void Add(const std::string& name, int ends_at) {
+    int sv[2];
+    ASSERT_EQ(::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv), 0);
+    pool_.Add(std::make_unique<LoggedConn>(sv[0], name, ends_at, &log_), name);
+    peers_.push_back(sv[1]);
+  }
+  std::vector<std::string> log_;
+  std::vector<int> peers_;
+};
+
+// At the end of a run every worker is told before any is waited for, so
+// that the run ends when the slowest has exited, not after the sum.
+TEST_F(ShutdownTest, EveryWorkerIsToldBeforeAnyIsWaitedFor) {
+  Add("a", 3);
+  Add("b", 1);
+  pool_.Shutdown();
+  EXPECT_EQ(log_, (std::vector<std::string>{"hangup a", "hangup b", "reap a", "reap b"}));
+}
+
+// One that does not exit is given the second the others are, then killed
+// (real time: the pool waits for processes, not on its clock).
+TEST_F(ShutdownTest, AWorkerThatDoesNotExitIsKilledAfterASecond) {
+  Add("stuck", 0);
+  Add("quick", 2);
+  const double t0 = MonotonicSeconds();
+  pool_.Shutdown();
+  const double waited = MonotonicSeconds() - t0;
+  EXPECT_EQ(log_, (std::vector<std::string>{"hangup stuck", "hangup quick",
+                                            "reap stuck, killed", "reap quick"}));
+  EXPECT_GE(waited, 1.0);
+  EXPECT_LT(waited, 1.9);
+}
+
 // A real worker on a thread: it joins, computes the column the master
 // would and leaves on bye with status 0.
 TEST_F(PoolTest, ARealWorkerComputesTheColumn) {
