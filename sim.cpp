@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include <poll.h>
+#include <sys/epoll.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -68,6 +69,9 @@ void SimTransport::Assign(int w, const proto::Assignment& a) {
   Event ev{Event::kSend, w, frame.size(), Event::kWork};
   ev.a = a;
   Schedule(Now(), ev);
+  Worker& wk = workers_[size_t(w)];
+  unsent_ += !wk.unsent;
+  wk.unsent = true;
 }
 
 void SimTransport::Divide(const std::vector<int32_t>& elems) {
@@ -247,6 +251,11 @@ void SimTransport::Advance(double* master_cpu, double until, bool stop_on_arriva
 // meanwhile.
 void SimTransport::Charge() {
   double cpu = opts_.master_cost_s >= 0 ? opts_.master_cost_s : ThreadCpuSeconds() - mark_;
+  cpu += io_owed_ + opts_.io.write_s * unsent_;
+  io_owed_ = 0;
+  if (unsent_ > 0)
+    for (Worker& w : workers_) w.unsent = false;
+  unsent_ = 0;
   master_s_ += cpu;
   Advance(&cpu, 0, false);
 }
@@ -269,6 +278,14 @@ void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
       master_s_ += wake;
       Advance(&wake, 0, false);
     }
+  }
+  // Charged at the next turn: this epoll_wait, and a read per worker heard.
+  io_owed_ += opts_.io.epoll_s;
+  ++polls_;
+  for (const Event& ev : inbox_) {
+    Worker& wk = workers_[size_t(ev.worker)];
+    if (wk.heard != polls_) io_owed_ += opts_.io.read_s;
+    wk.heard = polls_;
   }
   // From here on it is the master's work again: decoding what arrived.
   mark_ = ThreadCpuSeconds();
@@ -322,18 +339,70 @@ double MeasureWakeup() {
     ::_exit(0);
   }
   ::close(sv[1]);
-  double best = HUGE_VAL;
-  for (int r = 0; r < kRounds && pid > 0; ++r) {
+  // poll(2) and a read of a byte, kWakes times on fd: CPU seconds each.
+  auto each = [](int fd) {
     const double c0 = ThreadCpuSeconds();
-    int woken = 0;
-    for (; woken < kWakes; ++woken) {
-      pollfd p{sv[0], POLLIN, 0};
+    for (int i = 0; i < kWakes; ++i) {
+      pollfd p{fd, POLLIN, 0};
       char b;
-      if (::poll(&p, 1, 1000) != 1 || ::read(sv[0], &b, 1) != 1) break;
+      if (::poll(&p, 1, 1000) != 1 || ::read(fd, &b, 1) != 1) return HUGE_VAL;
     }
-    if (woken == kWakes) best = std::min(best, (ThreadCpuSeconds() - c0) / kWakes);
-  }
+    return (ThreadCpuSeconds() - c0) / kWakes;
+  };
+  double woken = HUGE_VAL, ready = HUGE_VAL;
+  for (int r = 0; r < kRounds && pid > 0; ++r) woken = std::min(woken, each(sv[0]));
   ::close(sv[0]);
   if (pid > 0) ::waitpid(pid, nullptr, 0);
-  return std::isfinite(best) ? best : 0;
+  // The same calls with the bytes there already: what MeasureIo charges.
+  const std::string bytes(kWakes, 'x');
+  for (int r = 0; r < kRounds && std::isfinite(woken); ++r) {
+    if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0) break;
+    if (::write(sv[1], bytes.data(), bytes.size()) == ssize_t(bytes.size()))
+      ready = std::min(ready, each(sv[0]));
+    ::close(sv[0]);
+    ::close(sv[1]);
+  }
+  return std::isfinite(woken) && std::isfinite(ready) ? std::max(0.0, woken - ready) : 0;
+}
+
+SimOptions::Io MeasureIo() {
+  SimOptions::Io io;
+  int sv[2];
+  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0) return io;
+  const int ep = ::epoll_create1(EPOLL_CLOEXEC);
+  epoll_event ev{};
+  ev.events = EPOLLIN;
+  if (ep < 0 || ::epoll_ctl(ep, EPOLL_CTL_ADD, sv[0], &ev) != 0) {
+    if (ep >= 0) ::close(ep);
+    ::close(sv[0]);
+    ::close(sv[1]);
+    return io;
+  }
+  constexpr int kRounds = 3, kCalls = 40;
+  const std::string frame(2048, 'c'), work(24, 'w');
+  std::string buf(frame.size(), '\0');
+  io.epoll_s = io.read_s = io.write_s = HUGE_VAL;
+  bool ok = true;
+  for (int r = 0; r < kRounds && ok; ++r) {
+    double c0 = ThreadCpuSeconds();
+    for (int i = 0; i < kCalls; ++i) ok &= ::write(sv[1], work.data(), work.size()) == ssize_t(work.size());
+    io.write_s = std::min(io.write_s, (ThreadCpuSeconds() - c0) / kCalls);
+    c0 = ThreadCpuSeconds();
+    epoll_event got[16];
+    for (int i = 0; i < kCalls; ++i) ok &= ::epoll_wait(ep, got, 16, 0) == 1;
+    io.epoll_s = std::min(io.epoll_s, (ThreadCpuSeconds() - c0) / kCalls);
+    for (size_t left = work.size() * kCalls; ok && left > 0;) {  // drained, untimed
+      const ssize_t n = ::read(sv[0], &buf[0], std::min(left, buf.size()));
+      ok &= n > 0;
+      left -= size_t(std::max<ssize_t>(n, 0));
+    }
+    for (int i = 0; i < kCalls; ++i) ok &= ::write(sv[1], frame.data(), frame.size()) == ssize_t(frame.size());
+    c0 = ThreadCpuSeconds();
+    for (int i = 0; i < kCalls; ++i) ok &= ::read(sv[0], &buf[0], buf.size()) == ssize_t(buf.size());
+    io.read_s = std::min(io.read_s, (ThreadCpuSeconds() - c0) / kCalls);
+  }
+  ::close(ep);
+  ::close(sv[0]);
+  ::close(sv[1]);
+  return ok ? io : SimOptions::Io();
 }

@@ -19,7 +19,9 @@
 //    between runs on the monotonic clock, which costs no system call
 //    (the CPU clock's costs 1.5 us here, and the master asks the time
 //    several times per shot). A master that slept in Poll for want of
-//    events also pays `wakeup_s` when one wakes it, as a real one does.
+//    events also pays `wakeup_s` when one wakes it, as a real one does,
+//    and every turn pays the system calls a real one makes (`io`): an
+//    epoll_wait, a read per worker heard, a write per worker given work.
 //  * The master's link is one shared medium that all frames, both ways,
 //    cross one after another (FIFO by the time they are sent): a frame of
 //    B bytes holds it 8B / bandwidth seconds, then arrives `latency` later.
@@ -93,6 +95,13 @@ struct SimOptions {
   // run pays and the simulated master, never sleeping, does not):
   // MeasureWakeup() on this machine, or 0.
   double wakeup_s = 0;
+  // CPU seconds of the system calls that a real master makes and the
+  // simulated one does not (MeasureIo() on this machine, or 0): an
+  // epoll_wait per Poll, a read per worker heard in it (all its frames in
+  // one read), a write per worker given work since the last Poll or Send.
+  struct Io {
+    double epoll_s = 0, read_s = 0, write_s = 0;
+  } io;
   // The columns' parameters, as RunOptions has them.
   int resolution = 256;
   bool rotate = true;
@@ -100,9 +109,16 @@ struct SimOptions {
 };
 
 // This machine's CPU cost of one wake-up: a thread blocked in poll(2) on
-// a socket, woken by another process's write every 300 us, in thread CPU
+// a socket, woken by another process's write every 300 us, less the same
+// poll(2) and read(2) finding the byte there already, in thread CPU
 // seconds per wake-up (the least of 3 rounds of 200).
 double MeasureWakeup();
+
+// This machine's CPU cost of the master's system calls (SimOptions::Io):
+// epoll_wait finding a socket ready, a read of a 2 KB frame (a column's
+// size on the shipped scenes), a write of an assignment, on a socketpair;
+// thread CPU seconds each, the least of 3 rounds.
+SimOptions::Io MeasureIo();
 
 class SimTransport : public Transport {
  public:
@@ -153,6 +169,8 @@ class SimTransport : public Transport {
     double last_arrival = 0;  // of its frames at the master
     double link_free = 0;     // when its own link is next idle
     long columns = 0;
+    bool unsent = false;      // given work since the last Poll or Send
+    long heard = -1;          // the last Poll that read it
   };
 
   void Schedule(double t, Event ev);
@@ -165,7 +183,7 @@ class SimTransport : public Transport {
   // Runs the world forward: while the master works `*master_cpu` seconds
   // (master_cpu non-null), else until `until` or, with stop_on_arrival,
   // the first frame at the master.
-  void Charge();  // the master's work since the last Poll or Send
+  void Charge();  // the master's work since the last Poll or Send, and its writes
   void Advance(double* master_cpu, double until, bool stop_on_arrival);
   void Process(Event& ev);
   void Start(int w);
@@ -178,6 +196,9 @@ class SimTransport : public Transport {
   // a hundred taking turns would be charged cache misses no worker has.
   Hemicube hemicube_;
   proto::Column scratch_;
+  int unsent_ = 0;           // workers with Worker::unsent
+  long polls_ = 0;
+  double io_owed_ = 0;       // system calls' CPU seconds not yet charged
   std::vector<Worker> workers_;
   std::map<std::pair<double, long>, Event> events_;  // by time, then order made
   long seq_ = 0;

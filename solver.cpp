@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <iterator>
 #include <type_traits>
 
@@ -25,22 +24,6 @@ double PixelFormFactor(double pixel_ff, double cos_a) {
   if (!(cos_a > 0)) return pixel_ff;
   const double m = std::max(cos_a, std::sqrt(std::max(0.0, 1 - cos_a * cos_a)));
   return pixel_ff * cos_a * m * m * m;
-}
-
-// v / s per channel, exactly as glm's operator/ (each an IEEE division:
-// the same bits), red and green as one two-lane division (GCC's vector
-// extension; SSE2's divpd on x86-64): Shoot divides ρ by an element's area
-// per covered element, and what a patch receives by its area per touched
-// patch, and a division is dear.
-inline glm::dvec3 Over(const glm::dvec3& v, double s) {
-  typedef double Pair __attribute__((vector_size(16)));
-  Pair rg;
-  std::memcpy(&rg, &v.r, sizeof rg);
-  rg /= s;
-  glm::dvec3 out;
-  std::memcpy(&out.r, &rg, sizeof rg);
-  out.b = v.b / s;
-  return out;
 }
 
 // The variance that a shot's gain g (luminance) adds to an element's B
@@ -89,6 +72,7 @@ void Solver::PatchArrays() {
     patch_[p].material = face.material;
     patch_[p].group = mesh_.group_of.empty() ? -1 : mesh_.group_of[p];
     patch_[p].area = mesh_.patch_area[p];
+    patch_[p].inv_area = 1.0 / patch_[p].area;
     patch_[p].fsum = 0;
     weight_[p] = patch_[p].area * std::max({rho.r, rho.g, rho.b});
   }
@@ -150,7 +134,7 @@ void Solver::Grow() {
   for (size_t e = from; e < n; ++e) {
     const Element& el = mesh_.elems[e];
     patch_of_[e] = el.IsLeaf() ? el.patch : ~el.patch;
-    elem_[e].area = mesh_.elem_area[e];
+    elem_[e].inv_area = 1.0 / mesh_.elem_area[e];
     const int parent = mesh_.parent[e];
     if (parent >= 0 && size_t(parent) < from) patch_of_[size_t(parent)] = ~el.patch;
   }
@@ -379,12 +363,11 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
       const int32_t e = col[i].elem;
       int32_t q = patch_of[e];
       const double f = double(col[i].f);
-      // ρ/A from the patch's ρ and the element's area here rather than a
-      // copy per element (24 bytes an element): the same division, so the
-      // same bits. The area is the solver's copy beside B (elem_), not
-      // Mesh::elem_area, another cache line each.
+      // ρ/A from the patch's ρ and the element's 1/A here rather than a
+      // copy per element (24 bytes an element). 1/A is the solver's copy
+      // beside B (elem_), not Mesh::elem_area, another cache line each.
       if (q >= 0) {
-        const glm::dvec3 w = f * Over(mats[patch[size_t(q)].material].rho, elem[size_t(e)].area);
+        const glm::dvec3 w = (f * elem[size_t(e)].inv_area) * mats[patch[size_t(q)].material].rho;
         const glm::dvec3 gain = xa * w;
         elem[e].b += gain;
         if (kExtras) {
@@ -395,7 +378,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
       } else {  // divided since the column was computed: each leaf gains alike
         q = ~q;
         mesh_.LeavesUnder(e, &leaves_);
-        const glm::dvec3 w = f * Over(mats[patch[size_t(q)].material].rho, elem[size_t(e)].area);
+        const glm::dvec3 w = (f * elem[size_t(e)].inv_area) * mats[patch[size_t(q)].material].rho;
         const glm::dvec3 gain = xa * w;
         const double var = noisy ? ShotNoise(Lum(gain), f, pixel(q)) : 0;
         const float first = direct ? float(Lum(ka * w)) : 0.0f;
@@ -412,7 +395,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
             const int32_t r = patch_of[size_t(l)];
             touched[reached] = r;
             reached += patch[r].fsum == 0;
-            patch[r].fsum += f * (elem[size_t(l)].area / elem[size_t(e)].area);
+            patch[r].fsum += f * (mesh_.elem_area[size_t(l)] / mesh_.elem_area[size_t(e)]);
           }
           continue;
         }
@@ -444,7 +427,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
     patch_[q].lit |= Abs(reflected) > 0;
     if (patch_[q].blind) continue;  // a hemicube speck: it could not pass it on
     abs_sum -= Abs(patch_[q].unshot) * patch_[q].area;
-    patch_[q].unshot += Over(reflected, patch_[q].area);
+    patch_[q].unshot += reflected * patch_[q].inv_area;
     abs_sum += Abs(patch_[q].unshot) * patch_[q].area;
     unshot_sum += reflected;
     // Light reaching a group's member moves its group's key, once a shot.
@@ -593,6 +576,7 @@ void Solver::Split(int p) {
   for (size_t i = 0; i < pieces.size(); ++i) {
     const int q = pieces[i];
     patch_[size_t(q)].area = mesh_.patch_area[size_t(q)];
+    patch_[size_t(q)].inv_area = 1.0 / patch_[size_t(q)].area;
     weight_[size_t(q)] = patch_[size_t(q)].area * std::max({kd.r, kd.g, kd.b});
     const IdSpan tops = mesh_.Tops(q);
     std::vector<int> stack(tops.begin(), tops.end());

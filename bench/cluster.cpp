@@ -2,7 +2,8 @@
 // rows on stdout (bench/master.sh adds the headers).
 //   radiosity-cluster SCENE.obj SHOTS [R] [WORKERS...]
 // The real scheduler and solver drive simulated workers (every column
-// computed for real, the master charged its own measured CPU time) on a
+// computed for real, the master charged its own measured CPU time, its
+// wake-ups and its system calls) on a
 // shared link of 1 and 10 Gbit/s with 100 us latency, from 1 worker up
 // (default 8 32 64 128). Per run: simulated seconds for SHOTS shots, the
 // speedup over one simulated worker on the same link, the efficiency, the
@@ -38,6 +39,10 @@ int main(int argc, char** argv) {
   LoadMeshOrDie("radiosity-cluster", argv[1], &scene, &mesh);
   std::string name = argv[1];
   name = name.substr(name.find_last_of('/') + 1);
+  // What a real master pays and the simulated one does not: its wake-ups
+  // and its system calls, on this machine (sim.h).
+  const double wake = MeasureWakeup();
+  const SimOptions::Io io = MeasureIo();
   for (double bps : {1e9, 1e10}) {
     double one = 0;
     std::vector<int> runs = {1};
@@ -47,6 +52,8 @@ int main(int argc, char** argv) {
       so.workers = w;
       so.bandwidth_bps = bps;
       so.resolution = res;
+      so.wakeup_s = wake;
+      so.io = io;
       SimTransport t(mesh, so);
       Solver solver(mesh, true);
       RunOptions o;

@@ -217,6 +217,47 @@ TEST(Sim, AMasterThatSleptPaysItsWakeUp) {
   EXPECT_NEAR(master(8, 0.5 * kCost, wake), master(8, 0.5 * kCost, 0), 2 * wake);
 }
 
+// The system calls a real master makes: an epoll_wait per Poll, a read
+// per worker heard in it, a write per worker given work since the last
+// turn. One worker, the master faster: each column is heard alone and
+// answered by one assignment. 8 workers behind a busy master: columns of
+// several workers at a Poll, a read each, and fewer Polls than shots.
+TEST(Sim, TheMastersSystemCallsAreCharged) {
+  Mesh m = BoxMesh();
+  struct Got {
+    double master;
+    long columns;  // delivered to the master
+  };
+  auto run = [&](int workers, double cost, SimOptions::Io io) {
+    SimOptions o = Fixed(workers);
+    o.master_cost_s = cost;
+    o.io = io;
+    SimTransport t(m, o);
+    RunResult r = Simulate(m, Shots(100), &t);
+    EXPECT_EQ(r.shots, 100);
+    long delivered = 0;
+    for (int w = 0; w < workers; ++w) delivered += t.Columns(w);
+    return Got{t.MasterSeconds(), delivered};
+  };
+  const double c = 0.01 * kCost;
+  const Got none = run(1, 0, {});
+  const Got read = run(1, 0, {0, c, 0}), write = run(1, 0, {0, 0, c});
+  // The join and each column, read on its own.
+  EXPECT_NEAR(read.master - none.master, c * double(none.columns + 1), 2 * c);
+  // The first queue's assignments go in one write; then one a column.
+  EXPECT_GE(write.master - none.master, c * double(none.columns - 3));
+  EXPECT_LE(write.master - none.master, c * double(none.columns + 1));
+  // Busy with 8 workers: fewer epoll_waits than shots; a read per worker
+  // heard, so no more than its frames but more than the Polls.
+  const Got busy = run(8, 0.5 * kCost, {}), polls = run(8, 0.5 * kCost, {c, 0, 0});
+  const Got reads = run(8, 0.5 * kCost, {0, c, 0});
+  const double n_polls = (polls.master - busy.master) / c;
+  const double n_reads = (reads.master - busy.master) / c;
+  EXPECT_LT(n_polls, 100);
+  EXPECT_GT(n_reads, n_polls);
+  EXPECT_LE(n_reads, double(busy.columns) + 8 + 0.5);
+}
+
 // A master slower than its workers stops feeding them: the columns it has
 // not shot count against their queues, so they do not pile up (which
 // would shoot patches in arrival order, not by power).
