@@ -46,7 +46,10 @@ if [ "$code" = "200 text/html; charset=utf-8" ] && grep -q 'WebGL' "$T/page.html
    ! grep -q 'src="view.js"' "$T/page.html"; then
   pass "GET / is the page with its script in it ($code)"
 else fail "GET / is the page with its script in it (got $code)"; fi
-curl -s -o "$T/state.json" "${url}state.json" || fail "GET /state.json"
+# The server is up before the run's first log row (shot 0) is in: asked
+# again until it is (a run at load 8 once answered with no rows).
+state_rows() { curl -s -o "$T/state.json" "${url}state.json" && grep -q '"rows":\[\[' "$T/state.json"; }
+wait_until 20 state_rows || fail "GET /state.json with a log row (within 20 s)"
 if python3 - "$T/state.json" <<'EOF'
 import json, sys
 s = json.load(open(sys.argv[1]))
