@@ -27,7 +27,7 @@ MAZE=$SCENES/maze.obj
 # --seed alone moves them by 30%, and shot order by 0.5%.
 ARGS=(-e 1e-5 -r 128)
 
-run_ok "maze, sequential" "$T/seq" -j 0 "${ARGS[@]}" "$MAZE" || finish
+run_ok_shared "maze, sequential" "$T/seq" -j 0 "${ARGS[@]}" "$MAZE" || finish
 for j in 2 4; do
   run_ok "maze, -j $j" "$T/j$j" -j "$j" "${ARGS[@]}" "$MAZE" &&
     check_same "maze: -j $j agrees with -j 0" "$T/j$j/result.csv" "$T/seq/result.csv" 0.5

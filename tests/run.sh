@@ -158,7 +158,11 @@ asan_env() {
   ASAN_OPTIONS=abort_on_error=1:detect_leaks=1
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 }
-export RADIOSITY ASAN_OPTIONS UBSAN_OPTIONS
+# The -j 0 runs that several tests compare against, made once for all
+# of them (run_ok_shared in tests/lib.sh).
+RADIOSITY_SHARED=$log/shared
+mkdir "$RADIOSITY_SHARED" || exit 1
+export RADIOSITY ASAN_OPTIONS UBSAN_OPTIONS RADIOSITY_SHARED
 san=no
 [ -x build/asan/radiosity ] && [ -x build/asan/unit_tests ] && san=yes
 

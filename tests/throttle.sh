@@ -43,7 +43,7 @@ fi
 EOF
 chmod +x "$T/throttled.sh"
 
-run_ok "maze, sequential" "$T/seq" -j 0 "${ARGS[@]}" "$MAZE" || finish
+run_ok_shared "maze, sequential" "$T/seq" -j 0 "${ARGS[@]}" "$MAZE" || finish
 if run_ok "maze, a worker behind pv -L 50k" "$T/slow" -v -j 2 --worker-cmd "$T/throttled.sh" \
      "${ARGS[@]}" "$MAZE"; then
   check_same "throttled worker: agrees with -j 0" "$T/slow/result.csv" "$T/seq/result.csv" 0.5
