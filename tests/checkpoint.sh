@@ -79,14 +79,15 @@ run_ok "SIGINT, resumed" "$T/int" -j 0 "${ARGS[@]}" --resume "$T/int.ck" "$ROOM"
   fi
 
 # --- kill -9 with workers ----------------------------------------------------
-# On the maze converged far (as in tests/parallel.sh), where parallel and
+# On the maze converged far (as tests/parallel.sh runs it: the same -j 0
+# run, made once under tests/run.sh: run_ok_shared), where parallel and
 # sequential runs meet within 0.5% per face, so that a shot lost or shot
 # twice across the resume shows. Not the room: -j 2 and -j 0 runs of it
 # differ by 2.6-4.7% on a thin picture-frame face by shot order alone
 # (8 runs under load), and once by 9.4% against a 5% tolerance.
 MAZE=$SCENES/maze.obj
-PAR=(-r 128 -e 1e-5)
-run_ok "maze, uninterrupted, -j 0" "$T/mwhole" -j 0 "${PAR[@]}" "$MAZE" &&
+PAR=(-e 1e-5 -r 128)
+run_ok_shared "maze, uninterrupted, -j 0" "$T/mwhole" -j 0 "${PAR[@]}" "$MAZE" &&
   interrupted par KILL -j 2 "${PAR[@]}" "$MAZE" &&
   no_workers_left "kill -9 of the master, -j 2: no worker left behind (within 5 s)" &&
   run_ok "kill -9, -j 2, resumed with -j 2" "$T/par" -j 2 "${PAR[@]}" --resume "$T/par.ck" "$MAZE" &&

@@ -173,6 +173,30 @@ run_ok() {
   return 0
 }
 
+# run_ok_shared WHAT OUTDIR [ARGS...]: run_ok, for a -j 0 run that other
+# tests make too (the maze converged to -e 1e-5: tests/parallel.sh,
+# throttle.sh and checkpoint.sh each compare against it). Where
+# tests/run.sh gives a directory for it ($RADIOSITY_SHARED), the first
+# test to ask makes the run there, and the others wait for it (flock) and
+# copy it into OUTDIR: -j 0 runs of one binary and arguments are the same
+# bit for bit. Without it (a test run alone), run_ok.
+run_ok_shared() {
+  local what=$1 out=$2 dir lock; shift 2
+  [ -n "${RADIOSITY_SHARED:-}" ] || { run_ok "$what" "$out" "$@"; return; }
+  dir=$RADIOSITY_SHARED/$(printf '%s\n' "$RADIOSITY" "$@" | sha256sum | cut -c1-16)
+  exec {lock}>"$dir.lock"
+  flock "$lock"
+  if [ -e "$dir.ok" ]; then
+    echo "# $what: the run another test made (radiosity $*)"
+  elif run_ok "$what" "$dir" "$@"; then
+    : >"$dir.ok"
+  else
+    exec {lock}>&-; return 1
+  fi
+  exec {lock}>&-
+  mkdir -p "$out" && cp -r "$dir/." "$out/"
+}
+
 # csv_get FILE FACE COLUMN: the value of COLUMN (header name, e.g. B_r) in
 # the row whose `face` is FACE.
 csv_get() {

@@ -1,10 +1,12 @@
 #!/bin/bash
 # A worker behind a slow link, for real: two local workers, the first
 # one's output piped through `pv -L` (a rate limiter, 50 KB/s: its maze
-# columns at R 256, computed in about 2 ms, came 31 to 56 ms apart in
-# three runs; at 200 KB/s, with protocol 6's shorter columns, one
-# clean-clone run had them only 2.6 times their computing apart and the
-# check below failed), both in one run (--worker-cmd):
+# columns at R 128, computed in about 0.8 ms, came 20 to 65 ms apart in
+# two runs, at R 256 2 ms and 31 to 56 ms; at 200 KB/s, with protocol 6's
+# shorter columns, one clean-clone run had them only 2.6 times their
+# computing apart and the check below failed), both in one run
+# (--worker-cmd). The maze at R 128, as tests/parallel.sh runs it (half
+# the time of R 256):
 #  * the run converges to the -j 0 answer within 0.5% per face (as
 #    tests/parallel.sh), both workers joined, none lost;
 #  * the throttled worker was given work; it measured its link (its
@@ -26,7 +28,7 @@ if ! command -v pv >/dev/null 2>&1; then
 fi
 
 MAZE=$(cd "$(dirname "$0")/../scenes" && pwd)/maze.obj
-ARGS=(-e 1e-5 -r 256)
+ARGS=(-e 1e-5 -r 128)
 
 # The first worker started is the throttled one; it leaves its pid (the
 # master's child, in the worker's name) for the checks below.
@@ -41,7 +43,7 @@ fi
 EOF
 chmod +x "$T/throttled.sh"
 
-run_ok "maze, sequential" "$T/seq" -j 0 "${ARGS[@]}" "$MAZE" || finish
+run_ok_shared "maze, sequential" "$T/seq" -j 0 "${ARGS[@]}" "$MAZE" || finish
 if run_ok "maze, a worker behind pv -L 50k" "$T/slow" -v -j 2 --worker-cmd "$T/throttled.sh" \
      "${ARGS[@]}" "$MAZE"; then
   check_same "throttled worker: agrees with -j 0" "$T/slow/result.csv" "$T/seq/result.csv" 0.5
