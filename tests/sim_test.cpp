@@ -195,19 +195,33 @@ TEST(Sim, TheMasterIsChargedItsWork) {
   EXPECT_NEAR(t.MasterSeconds(), r.seconds, 2 * kCost);
 }
 
+// What 100 shots with fixed costs charge the master, and the columns
+// delivered to it.
+struct Charged {
+  double master;
+  long columns;
+};
+Charged HundredShots(Mesh& m, int workers, double master_cost, double wake,
+                     const SimOptions::Io& io = {}) {
+  SimOptions o = Fixed(workers);
+  o.master_cost_s = master_cost;
+  o.wakeup_s = wake;
+  o.io = io;
+  SimTransport t(m, o);
+  RunResult r = Simulate(m, Shots(100), &t);
+  EXPECT_EQ(r.shots, 100);
+  long delivered = 0;
+  for (int w = 0; w < workers; ++w) delivered += t.Columns(w);
+  return {t.MasterSeconds(), delivered};
+}
+
 // A master that waits for its one worker sleeps before each column and
 // pays its wake-up then; a master busy with the columns of many does not
 // sleep, so it pays none.
 TEST(Sim, AMasterThatSleptPaysItsWakeUp) {
   Mesh m = BoxMesh();
   auto master = [&](int workers, double cost, double wake) {
-    SimOptions o = Fixed(workers);
-    o.master_cost_s = cost;
-    o.wakeup_s = wake;
-    SimTransport t(m, o);
-    RunResult r = Simulate(m, Shots(100), &t);
-    EXPECT_EQ(r.shots, 100);
-    return t.MasterSeconds();
+    return HundredShots(m, workers, cost, wake).master;
   };
   const double wake = 0.1 * kCost;
   const double extra = master(1, 0, wake) - master(1, 0, 0);
@@ -224,24 +238,12 @@ TEST(Sim, AMasterThatSleptPaysItsWakeUp) {
 // several workers at a Poll, a read each, and fewer Polls than shots.
 TEST(Sim, TheMastersSystemCallsAreCharged) {
   Mesh m = BoxMesh();
-  struct Got {
-    double master;
-    long columns;  // delivered to the master
-  };
   auto run = [&](int workers, double cost, SimOptions::Io io) {
-    SimOptions o = Fixed(workers);
-    o.master_cost_s = cost;
-    o.io = io;
-    SimTransport t(m, o);
-    RunResult r = Simulate(m, Shots(100), &t);
-    EXPECT_EQ(r.shots, 100);
-    long delivered = 0;
-    for (int w = 0; w < workers; ++w) delivered += t.Columns(w);
-    return Got{t.MasterSeconds(), delivered};
+    return HundredShots(m, workers, cost, 0, io);
   };
   const double c = 0.01 * kCost;
-  const Got none = run(1, 0, {});
-  const Got read = run(1, 0, {0, c, 0}), write = run(1, 0, {0, 0, c});
+  const Charged none = run(1, 0, {});
+  const Charged read = run(1, 0, {0, c, 0}), write = run(1, 0, {0, 0, c});
   // The join and each column, read on its own.
   EXPECT_NEAR(read.master - none.master, c * double(none.columns + 1), 2 * c);
   // The first queue's assignments go in one write; then one a column.
@@ -249,8 +251,8 @@ TEST(Sim, TheMastersSystemCallsAreCharged) {
   EXPECT_LE(write.master - none.master, c * double(none.columns + 1));
   // Busy with 8 workers: fewer epoll_waits than shots; a read per worker
   // heard, so no more than its frames but more than the Polls.
-  const Got busy = run(8, 0.5 * kCost, {}), polls = run(8, 0.5 * kCost, {c, 0, 0});
-  const Got reads = run(8, 0.5 * kCost, {0, c, 0});
+  const Charged busy = run(8, 0.5 * kCost, {}), polls = run(8, 0.5 * kCost, {c, 0, 0});
+  const Charged reads = run(8, 0.5 * kCost, {0, c, 0});
   const double n_polls = (polls.master - busy.master) / c;
   const double n_reads = (reads.master - busy.master) / c;
   EXPECT_LT(n_polls, 100);
