@@ -70,8 +70,8 @@ void SimTransport::Assign(int w, const proto::Assignment& a) {
   ev.a = a;
   Schedule(Now(), ev);
   Worker& wk = workers_[size_t(w)];
-  unsent_ += !wk.unsent;
-  wk.unsent = true;
+  unsent_ += wk.given != turn_;
+  wk.given = turn_;
 }
 
 void SimTransport::Divide(const std::vector<int32_t>& elems) {
@@ -91,8 +91,7 @@ double SimTransport::Transmit(size_t bytes) {
     double bits = 8.0 * double(bytes);
     for (;;) {  // through the bandwidth's changes, piece by piece
       double bw = opts_.bandwidth_bps, next = HUGE_VAL;
-      for (double bps : opts_.link_bps) CHECK(std::isfinite(bps));
-  for (const SimOptions::Fluctuation& f : opts_.bandwidth_changes) {
+      for (const SimOptions::Fluctuation& f : opts_.bandwidth_changes) {
         if (f.from <= end && end < f.to) {
           bw *= f.factor;
           next = std::min(next, f.to);
@@ -253,9 +252,8 @@ void SimTransport::Charge() {
   double cpu = opts_.master_cost_s >= 0 ? opts_.master_cost_s : ThreadCpuSeconds() - mark_;
   cpu += io_owed_ + opts_.io.write_s * unsent_;
   io_owed_ = 0;
-  if (unsent_ > 0)
-    for (Worker& w : workers_) w.unsent = false;
   unsent_ = 0;
+  ++turn_;
   master_s_ += cpu;
   Advance(&cpu, 0, false);
 }
@@ -281,11 +279,10 @@ void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
   }
   // Charged at the next turn: this epoll_wait, and a read per worker heard.
   io_owed_ += opts_.io.epoll_s;
-  ++polls_;
   for (const Event& ev : inbox_) {
     Worker& wk = workers_[size_t(ev.worker)];
-    if (wk.heard != polls_) io_owed_ += opts_.io.read_s;
-    wk.heard = polls_;
+    if (wk.heard != turn_) io_owed_ += opts_.io.read_s;
+    wk.heard = turn_;
   }
   // From here on it is the master's work again: decoding what arrived.
   mark_ = ThreadCpuSeconds();

@@ -169,8 +169,8 @@ class SimTransport : public Transport {
     double last_arrival = 0;  // of its frames at the master
     double link_free = 0;     // when its own link is next idle
     long columns = 0;
-    bool unsent = false;      // given work since the last Poll or Send
-    long heard = -1;          // the last Poll that read it
+    long given = -1;          // the last turn (turn_) it was given work in
+    long heard = -1;          // the last turn whose Poll read it
   };
 
   void Schedule(double t, Event ev);
@@ -180,10 +180,10 @@ class SimTransport : public Transport {
   // own link first, if it has one.
   void Upload(int w, Event ev);
   double Speed(int w) const;  // column CPU seconds per second, alone on a core
+  void Charge();  // the master's work since the last Poll or Send, and its writes
   // Runs the world forward: while the master works `*master_cpu` seconds
   // (master_cpu non-null), else until `until` or, with stop_on_arrival,
   // the first frame at the master.
-  void Charge();  // the master's work since the last Poll or Send, and its writes
   void Advance(double* master_cpu, double until, bool stop_on_arrival);
   void Process(Event& ev);
   void Start(int w);
@@ -196,8 +196,8 @@ class SimTransport : public Transport {
   // a hundred taking turns would be charged cache misses no worker has.
   Hemicube hemicube_;
   proto::Column scratch_;
-  int unsent_ = 0;           // workers with Worker::unsent
-  long polls_ = 0;
+  long turn_ = 0;            // the master's turns charged (Poll and Send)
+  int unsent_ = 0;           // workers given work in this turn
   double io_owed_ = 0;       // system calls' CPU seconds not yet charged
   std::vector<Worker> workers_;
   std::map<std::pair<double, long>, Event> events_;  // by time, then order made
