@@ -71,8 +71,7 @@ void Solver::PatchArrays() {
     const glm::dvec3& rho = mesh_.Rho(face);
     patch_[p].material = face.material;
     patch_[p].group = mesh_.group_of.empty() ? -1 : mesh_.group_of[p];
-    patch_[p].area = mesh_.patch_area[p];
-    patch_[p].inv_area = 1.0 / patch_[p].area;
+    patch_[p].SetArea(mesh_.patch_area[p]);
     patch_[p].fsum = 0;
     weight_[p] = patch_[p].area * std::max({rho.r, rho.g, rho.b});
   }
@@ -575,8 +574,7 @@ void Solver::Split(int p) {
   glm::dvec3 total(0.0);
   for (size_t i = 0; i < pieces.size(); ++i) {
     const int q = pieces[i];
-    patch_[size_t(q)].area = mesh_.patch_area[size_t(q)];
-    patch_[size_t(q)].inv_area = 1.0 / patch_[size_t(q)].area;
+    patch_[size_t(q)].SetArea(mesh_.patch_area[size_t(q)]);
     weight_[size_t(q)] = patch_[size_t(q)].area * std::max({kd.r, kd.g, kd.b});
     const IdSpan tops = mesh_.Tops(q);
     std::vector<int> stack(tops.begin(), tops.end());

@@ -224,6 +224,10 @@ class Solver {
     int32_t group = -1;     // mesh_.group_of's (-1: none)
     uint8_t lit = 0;        // emits, or light reached it
     uint8_t blind = 0;      // its column was empty
+    void SetArea(double a) {  // area and 1/area never apart
+      area = a;
+      inv_area = 1.0 / a;
+    }
   };
   static_assert(sizeof(PatchShot) == 64, "one cache line");
   std::vector<PatchShot, HugePageAllocator<PatchShot>> patch_;
