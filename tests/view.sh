@@ -77,7 +77,8 @@ wait "$abuse"
 abuse_rc=$?
 # The page says when it is done with the live run (or ends); then the
 # run is stopped, and the page goes on to the view.html it writes.
-while ! grep -q '^# live page done' "$T/page.out" && kill -0 "$page" 2>/dev/null; do sleep 0.1; done
+page_done() { grep -q '^# live page done' "$T/page.out" || ! kill -0 "$page" 2>/dev/null; }
+wait_until "$(run_limit)" page_done
 kill -INT "$PID" 2>/dev/null
 wait "$PID"; rc=$?
 # The same run without the view, to the shot the live one stopped at.
