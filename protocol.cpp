@@ -343,7 +343,9 @@ void EncodeWork(const std::vector<Assignment>& m, std::string* out) {
   EndFrame(start, out);
 }
 
-void EncodeColumn(const Column& m, std::string* out) {
+namespace {
+// A column frame's fields before its form factors; returns BeginFrame's.
+size_t BeginColumn(const Column& m, std::string* out) {
   CHECK(m.patch >= 0 && m.k >= 0);
   CHECK(std::isfinite(m.compute_s) && m.compute_s >= 0);
   CHECK(std::isfinite(m.wait_s) && m.wait_s >= 0);
@@ -352,7 +354,19 @@ void EncodeColumn(const Column& m, std::string* out) {
   PutVarint(out, uint32_t(m.k));
   PutF64(out, m.compute_s);
   PutF64(out, m.wait_s);
+  return start;
+}
+}  // namespace
+
+void EncodeColumn(const Column& m, std::string* out) {
+  const size_t start = BeginColumn(m, out);
   PutFormFactors(m.ff, out);
+  EndFrame(start, out);
+}
+
+void EncodeColumn(const Column& m, std::string_view coded_ff, std::string* out) {
+  const size_t start = BeginColumn(m, out);
+  out->append(coded_ff);
   EndFrame(start, out);
 }
 

@@ -107,6 +107,10 @@ void EncodeReady(const Ready& m, std::string* out);
 void EncodeWork(const std::vector<Assignment>& m, std::string* out);
 // The column's form factors as ffcodec.h codes them.
 void EncodeColumn(const Column& m, std::string* out);
+// The same frame from form factors coded already (PutFormFactors' bytes,
+// in place of m.ff): a worker that sends one column many times
+// (bench/feed.cpp) codes it once.
+void EncodeColumn(const Column& m, std::string_view coded_ff, std::string* out);
 // Edits in the order made: e >= 0 divides element e, ~p splits patch p.
 void EncodeDivide(const std::vector<int32_t>& elems, std::string* out);
 void EncodeHeartbeat(std::string* out);

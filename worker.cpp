@@ -220,7 +220,7 @@ bool Worker::Handle(proto::Msg type, const std::string& payload, int* status,
 }
 
 int Worker::Run(std::string* err) {
-  std::string frame;
+  std::string frame, coded;
   proto::EncodeHello(proto::Hello(), &frame);
   if (!out_.Send(frame)) { *err = "cannot write to the master"; return kExitFailure; }
   proto::Msg type;
@@ -311,14 +311,17 @@ int Worker::Run(std::string* err) {
     col.wait_s = MonotonicSeconds() - todo_.front().received;
     todo_.pop_front();
     const double t0 = ThreadCpuSeconds();
-    if (column_)
-      column_(hemicube_.get(), mesh_, a, setup.rotate, setup.seed, &col.ff);
-    else
+    frame.clear();
+    if (column_) {
+      column_(hemicube_.get(), mesh_, a, setup.rotate, setup.seed, &coded);
+      col.compute_s = ThreadCpuSeconds() - t0;
+      proto::EncodeColumn(col, coded, &frame);
+    } else {
       ShotColumn(hemicube_.get(), mesh_, a.patch, a.Group(), a.k, setup.rotate, setup.seed,
                  &col.ff);
-    col.compute_s = ThreadCpuSeconds() - t0;
-    frame.clear();
-    proto::EncodeColumn(col, &frame);
+      col.compute_s = ThreadCpuSeconds() - t0;
+      proto::EncodeColumn(col, &frame);
+    }
     if (!out_.Send(frame)) return kExitOk;  // the master has gone: nothing to report to
   }
 }

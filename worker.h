@@ -13,10 +13,12 @@
 #include "hemicube.h"
 #include "protocol.h"
 
-// How a worker computes one assigned column: ShotColumn, unless a
-// benchmark feeds the master faster than hemicubes can (bench/feed.cpp).
+// How a worker computes one assigned column: ShotColumn, coded by
+// PutFormFactors, unless a benchmark feeds the master faster than
+// hemicubes can (bench/feed.cpp). It sets *coded to the column's form
+// factors as PutFormFactors codes them.
 using ColumnFn = std::function<void(Hemicube*, const Mesh&, const proto::Assignment&,
-                                    bool rotate, unsigned seed, std::vector<FormFactor>*)>;
+                                    bool rotate, unsigned seed, std::string* coded)>;
 
 // Returns the process exit status: 0 after Bye or end of stream, 1 on a
 // protocol error (*err says what; the master was also sent an Error).

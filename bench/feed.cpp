@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "../ffcodec.h"
 #include "../worker.h"
 
 int main(int argc, char** argv) {
@@ -24,20 +25,28 @@ int main(int argc, char** argv) {
                  argv[0], argv[0]);
     return 2;
   }
-  std::vector<std::vector<FormFactor>> memo;
-  ColumnFn column = [&memo](Hemicube* h, const Mesh& mesh, const proto::Assignment& a, bool rotate,
-                            unsigned seed, std::vector<FormFactor>* out) {
+  // Coded once, as the frame's bytes: coding takes a real worker some 20
+  // us a column, more than the master's own work on it, so coding each
+  // answer again made the feed, not the master, set the pace.
+  std::vector<std::string> memo;
+  std::vector<FormFactor> ff;
+  ColumnFn column = [&memo, &ff](Hemicube* h, const Mesh& mesh, const proto::Assignment& a,
+                                 bool rotate, unsigned seed, std::string* coded) {
     if (memo.empty()) {
       memo.resize(mesh.patches.size());
-      for (size_t p = 0; p < memo.size(); ++p)
-        ShotColumn(h, mesh, int(p), nullptr, 0, rotate, seed, &memo[p]);
+      for (size_t p = 0; p < memo.size(); ++p) {
+        ShotColumn(h, mesh, int(p), nullptr, 0, rotate, seed, &ff);
+        proto::PutFormFactors(ff, &memo[p]);
+      }
     }
     // A patch divided since (shooter splits) has no column made: its own.
     if (size_t(a.patch) >= memo.size()) {
-      ShotColumn(h, mesh, a.patch, a.Group(), a.k, rotate, seed, out);
+      ShotColumn(h, mesh, a.patch, a.Group(), a.k, rotate, seed, &ff);
+      coded->clear();
+      proto::PutFormFactors(ff, coded);
       return;
     }
-    *out = memo[size_t(a.patch)];
+    *coded = memo[size_t(a.patch)];
   };
   std::string err;
   const int status = RunWorker(0, 1, &err, column, /*spin=*/true);
