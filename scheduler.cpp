@@ -336,11 +336,15 @@ void Scheduler::Reclaim() {
   }
   if (!to) return;
   const double now = t_->Now();
-  const int best = solver_->Select();
-  const double top = best >= 0 ? solver_->PowerToShoot(best) : 0;
+  double top = -1;  // selected at the first deferred worker: a selection a turn was a tenth
+                    // of the master's work with 100 simulated workers and none deferred
   for (size_t w = 0; w < slots_.size(); ++w) {
     Slot& s = slots_[w];
     if (!s.alive || skip_[w] == 0) continue;
+    if (top < 0) {
+      const int best = solver_->Select();
+      top = best >= 0 ? solver_->PowerToShoot(best) : 0;
+    }
     for (auto it = s.sent.begin(); it != s.sent.end();) {
       if (!s.pace.ReturnsAfter(it->at, now, quickest) ||
           solver_->PowerToShoot(it->a.patch) <= top) {
