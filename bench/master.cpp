@@ -1,7 +1,7 @@
 // radiosity-master: the master's own work per shot on one scene, as one
 // table row on stdout (bench/master.sh adds the headers).
 //   radiosity-master SCENE.obj SHOTS [R] [--no-overshoot] [--divide [--every-leaf]]
-//                    [--rounds N] [--thread-cpu]
+//                    [--rounds N] [--thread-cpu] [--stir]
 // Each shot as the master does it with workers: select the next patch,
 // decode the column that comes back (the frame a worker sends, made here
 // by ShotColumn and EncodeColumn, which are not timed: a worker's work),
@@ -16,11 +16,17 @@
 // each part timed on the thread's CPU clock (a system call, about half a
 // microsecond a read, four a shot) rather than the wall clock scaled to
 // the round's CPU time: steadier on a machine shared with other work.
+// --stir: between shots (not timed) a real column is computed in this
+// thread, as the cluster simulation computes its workers' columns in the
+// master's process: what the hemicube's work does to the master's caches
+// (on this machine a thread on the other core does the same: its two
+// cores share them), which a master on its own machine does not pay.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -37,18 +43,19 @@ int main(int argc, char** argv) {
   if (argc < 3) {
     std::fprintf(stderr,
                  "usage: radiosity-master SCENE.obj SHOTS [R] [--no-overshoot] [--divide "
-                 "[--every-leaf]] [--rounds N] [--thread-cpu]\n");
+                 "[--every-leaf]] [--rounds N] [--thread-cpu] [--stir]\n");
     return 2;
   }
   const long shots = std::atol(argv[2]);
   int res = 256, rounds = 3;
-  bool overshoot = true, divide = false, every_leaf = false, thread_cpu = false;
+  bool overshoot = true, divide = false, every_leaf = false, thread_cpu = false, stir = false;
   for (int i = 3; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--no-overshoot")) overshoot = false;
     else if (!std::strcmp(argv[i], "--thread-cpu")) thread_cpu = true;
     else if (!std::strcmp(argv[i], "--rounds") && i + 1 < argc) rounds = std::max(1, std::atoi(argv[++i]));
     else if (!std::strcmp(argv[i], "--divide")) divide = true;
     else if (!std::strcmp(argv[i], "--every-leaf")) every_leaf = true;
+    else if (!std::strcmp(argv[i], "--stir")) stir = true;
     else res = std::atoi(argv[i]);
   }
   Scene scene;
@@ -78,7 +85,11 @@ int main(int argc, char** argv) {
     double sel = 0, dec = 0, sho = 0;
     covered = 0;
     const double cpu0 = ThreadCpuSeconds(), wall0 = MonotonicSeconds();
+    const std::unique_ptr<Hemicube> stir_cube = stir ? std::make_unique<Hemicube>(res) : nullptr;
+    std::vector<FormFactor> stirred;
     for (done = 0; done < long(frames.size()); ++done) {
+      if (stir)  // patches spread over the scene, as many workers' would be
+        ShotColumn(stir_cube.get(), mesh, int(done * 7919 % patches), nullptr, 0, true, 1, &stirred);
       double t0 = clock();
       const int p = solver.Select();
       solver.Take(p);
