@@ -321,8 +321,9 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   // on a loaded machine; 48 measured no better). Arrays that fit in this
   // core's second-level cache are not fetched early: there the fetches
   // cost only their instructions (radiosity-master, R 256, L2 of 1 MiB:
-  // on the room, 190 KB, a shot took 9.9 us with them and 8.4 without; at
-  // 640 KB the same either way; at 1.45 MB 7% less with them).
+  // on the room, 190 KB, shooting took 11.0 and 10.4 us a shot with them,
+  // 8.9 and 9.0 without; at 640 KB the same or 10% less without (two
+  // runs); at 1.45 MB 7% less with them).
   constexpr size_t kAhead = 32;
   const bool ahead = elem_.size() * (sizeof(ElemShot) + sizeof(int32_t)) +
                          patch_.size() * sizeof(PatchShot) > SecondLevelCacheBytes();

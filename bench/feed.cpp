@@ -25,9 +25,9 @@ int main(int argc, char** argv) {
                  argv[0], argv[0]);
     return 2;
   }
-  // Coded once, as the frame's bytes: coding takes a real worker some 20
-  // us a column, more than the master's own work on it, so coding each
-  // answer again made the feed, not the master, set the pace.
+  // Coded once, as the frame's bytes: coding took the feed some 27 us a
+  // column on the room (perf), more than the master's own work on it, so
+  // coding each answer again made the feed, not the master, set the pace.
   std::vector<std::string> memo;
   std::vector<FormFactor> ff;
   ColumnFn column = [&memo, &ff](Hemicube* h, const Mesh& mesh, const proto::Assignment& a,
