@@ -69,7 +69,16 @@ void Pace::Measure(double now, double sent_at, double wait_s, double compute_s, 
   // local worker 19 in flight).
   if (busy > compute_s) return;
   if (!queued) smooth(&wire_s, std::max(0.0, now - ready));
-  if (backlogged) smooth(&interval_s, interval);
+  if (backlogged) {
+    smooth(&interval_s, interval);
+  } else if (!queued && interval_s > 0) {
+    // Not behind another column, it bounds the time between columns from
+    // above: its own compute and round trip. Without that bound a time
+    // between columns measured while it stalled (stopped for a while, a
+    // link busy for a while) stayed, and kept the worker deferred for the
+    // rest of the run, since a deferred worker is rarely backlogged.
+    smooth(&interval_s, std::min(interval_s, compute_s + std::max(0.0, now - ready)));
+  }
 }
 
 // A patch given to a worker comes back after its Turnaround(); the other

@@ -447,7 +447,15 @@ void Scheduler::Fill() {
       Slot& s = slots_[w];
       if (!s.alive || s.Queued() >= size_t(s.pace.high) || shots < s.retry_at) continue;
       if (skip_[w] > 0 && pending_.empty()) {
-        const int p = PatchBelow(solver_, skip_[w], &held_);
+        int p = PatchBelow(solver_, skip_[w], &held_);
+        // Fewer have power than it should skip. With nothing of its own it
+        // takes the last of them, the others the top: without columns its
+        // pace was never measured again, and a worker stalled once (two
+        // seconds stopped, a link busy for a while) stood idle to the end
+        // of the run (Sim.AWorkerStalledForAWhileGetsWorkAgain: 54 of
+        // 4,002 columns). One truly slow holds that one patch, and gives
+        // it back should it come to matter (Reclaim).
+        if (p < 0 && s.Owned() == 0 && held_.size() >= 2) p = held_.back();
         if (p < 0) {
           // Not that many have power (the start of a wave): nothing for it
           // until the others have shot some; tried again in a while, so

@@ -461,3 +461,19 @@ TEST(Sim, ASlowWorkerDoesNotHoldUpTheRun) {
   EXPECT_LE(b.stale, slow.reclaimed);  // its columns for them, and no others
   EXPECT_LE(b.seconds, a.seconds);
 }
+
+// Stalled for 2 s (10^4 times slower: as if stopped), it looked slow, was
+// deferred, and had no patches far enough down the order: it stood idle to
+// the end (54 of 4,002 columns, 3.95 s). It takes the last patch with
+// power when it owns nothing, and a column it was not backlogged behind
+// bounds its pace: it comes back (628 columns, 3.37 s).
+TEST(Sim, AWorkerStalledForAWhileGetsWorkAgain) {
+  Mesh m = BoxMesh();
+  SimOptions o = Fixed(2);
+  o.column_cost_s = 1e-3;
+  o.slowdowns = {{0, 0.05, 2.05, 1e4}};
+  SimTransport t(m, o);
+  const RunResult r = Simulate(m, Shots(4000), &t);
+  EXPECT_GT(t.Columns(0), 400);
+  EXPECT_LT(r.seconds, 3.7);
+}
