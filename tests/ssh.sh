@@ -28,6 +28,11 @@ CORNELL=$(cd "$(dirname "$0")/../scenes" && pwd)/cornell.obj
 # R 64: the transports are what is tested here, and each such run takes
 # 2 s of CPU instead of the 5 s of the default R 256.
 ARGS=(-e 1e-5 -r 64)
+# Except the main case, at the default R against a reference of its own:
+# three workers, one of them held (below), shoot in an order far from the
+# reference's, and at R 64 the hemicube's noise made subdivisions, and so
+# answers, differ by up to 0.66% under load (0.06% at R 256, four runs).
+MAIN_ARGS=(-e 1e-5)
 
 if ! start_sshd; then
   echo "skip: $SSHD_WHY"
@@ -51,6 +56,7 @@ rad_run() {
 show() { grep -v "^radiosity: *[0-9.]* s " "$T/$1.err" | head -"${2:-4}" | sed 's/^/#   /'; }
 
 run_ok "local reference" "$T/ref" -j 2 "${ARGS[@]}" "$CORNELL" || finish
+run_ok "local reference, default R" "$T/ref-main" -j 2 "${MAIN_ARGS[@]}" "$CORNELL" || finish
 
 # --dump-hosts: the parsed list, without a scene or a connection.
 printf '# two kinds\n%s slots=2\nlocalhost # here\n' "$HOST" >"$T/hosts"
@@ -73,7 +79,7 @@ out=$("$RADIOSITY" -H "$T/bad-hosts" --dump-hosts 2>&1); rc=$?
 mkdir -p "$T/main"
 : >"$T/main.err"  # there before the first look at it
 timeout "$(run_limit)" env -u SSH_AUTH_SOCK HOME="$SSH_HOME" "$RADIOSITY" -v -o "$T/main" \
-  --timeout 120 -H "$T/hosts" "${ARGS[@]}" "$CORNELL" >"$T/main.out" 2>"$T/main.err" &
+  --timeout 120 -H "$T/hosts" "${MAIN_ARGS[@]}" "$CORNELL" >"$T/main.out" 2>"$T/main.err" &
 PID=$!
 wait_run 60 says main "local worker 1 (pid [0-9]*): joined"
 held=$(sed -n 's/.*local worker 1 (pid \([0-9]*\)): joined.*/\1/p' "$T/main.err")
@@ -81,10 +87,10 @@ held=$(sed -n 's/.*local worker 1 (pid \([0-9]*\)): joined.*/\1/p' "$T/main.err"
 wait_run 60 says_times main "$HOST worker [0-9]*: joined" 2
 [ -n "$held" ] && kill -CONT "$held"
 wait "$PID"; RC=$?
-echo "# radiosity -v -o main --timeout 120 -H hosts ${ARGS[*]} cornell.obj -> exit $RC (local worker $held held until the ssh workers joined)"
+echo "# radiosity -v -o main --timeout 120 -H hosts ${MAIN_ARGS[*]} cornell.obj -> exit $RC (local worker $held held until the ssh workers joined)"
 if [ "$RC" -eq 0 ] && [ -n "$held" ] && says main "$HOST worker 2: joined"; then
   pass "ssh slots=2 + localhost: all three workers joined, exit 0"
-  check_same "ssh slots=2 + localhost: answer" "$T/main/result.csv" "$T/ref/result.csv" 0.5
+  check_same "ssh slots=2 + localhost: answer" "$T/main/result.csv" "$T/ref-main/result.csv" 0.5
 else
   fail "ssh slots=2 + localhost (exit $RC)"; show main 8
 fi
