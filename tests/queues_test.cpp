@@ -138,6 +138,8 @@ TEST(Queues, ReturnsAfterComparesTurnarounds) {
   const Pace slow = Measured(1, 16, 8, 2);  // turnaround 32
   EXPECT_TRUE(slow.ReturnsAfter(10, 20, 2));    // back at 42, against 22
   EXPECT_FALSE(slow.ReturnsAfter(10, 40, 2));   // back at 42, against 42
+  EXPECT_TRUE(slow.ReturnsAfter(10, 50, 2));    // overdue: a service (8) more, against 2
+  EXPECT_FALSE(slow.ReturnsAfter(10, 50, 9));   // ... against 9
 }
 
 TEST(Queues, PatchBelowSkipsThatManyAndTakesNone) {
