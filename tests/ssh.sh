@@ -54,6 +54,16 @@ rad_run() {
   echo "# radiosity -v -o $name $* -> exit $RC"
 }
 show() { grep -v "^radiosity: *[0-9.]* s " "$T/$1.err" | head -"${2:-4}" | sed 's/^/#   /'; }
+# bg_ssh NAME ARGS...: rad_run's master in the background (under the same
+# bound); PID set, and $T/NAME.err there before the first look at it.
+bg_ssh() {
+  local name=$1; shift
+  mkdir -p "$T/$name"
+  : >"$T/$name.err"
+  timeout "$(run_limit)" env -u SSH_AUTH_SOCK HOME="$SSH_HOME" "$RADIOSITY" -v -o "$T/$name" "$@" \
+    >"$T/$name.out" 2>"$T/$name.err" &
+  PID=$!
+}
 
 run_ok "local reference" "$T/ref" -j 2 "${ARGS[@]}" "$CORNELL" || finish
 run_ok "local reference, default R" "$T/ref-main" -j 2 "${MAIN_ARGS[@]}" "$CORNELL" || finish
@@ -76,11 +86,7 @@ out=$("$RADIOSITY" -H "$T/bad-hosts" --dump-hosts 2>&1); rc=$?
 # both ssh workers have, then continued: they join whatever the load.
 # (--timeout 120: a worker given work and silent is dropped after
 # --timeout, 10 s by default.)
-mkdir -p "$T/main"
-: >"$T/main.err"  # there before the first look at it
-timeout "$(run_limit)" env -u SSH_AUTH_SOCK HOME="$SSH_HOME" "$RADIOSITY" -v -o "$T/main" \
-  --timeout 120 -H "$T/hosts" "${MAIN_ARGS[@]}" "$CORNELL" >"$T/main.out" 2>"$T/main.err" &
-PID=$!
+bg_ssh main --timeout 120 -H "$T/hosts" "${MAIN_ARGS[@]}" "$CORNELL"
 wait_run 60 says main "local worker 1 (pid [0-9]*): joined"
 held=$(sed -n 's/.*local worker 1 (pid \([0-9]*\)): joined.*/\1/p' "$T/main.err")
 [ -n "$held" ] && kill -STOP "$held"
@@ -175,10 +181,7 @@ no_remote_workers() { ! remote_workers >/dev/null; }
 # until N=$WANT remote workers joined and it shoots (a first shot count).
 bg_master() {
   local name=$1; shift
-  mkdir -p "$T/$name"
-  env -u SSH_AUTH_SOCK HOME="$SSH_HOME" "$RADIOSITY" -v -o "$T/$name" "$@" \
-    >"$T/$name.out" 2>"$T/$name.err" &
-  PID=$!
+  bg_ssh "$name" "$@"
   wait_run 60 says_times "$name" "$HOST worker [0-9]*: joined" "$WANT" && wait_shots "$name" 1
 }
 
