@@ -37,6 +37,7 @@ inline double ShotNoise(double g, double f, double df) {
   const double n = f / df;
   return g * g * (n < 4.0 / 9 ? 1 / n : (2.0 / 3) / (n * std::sqrt(n)));
 }
+
 // This core's second-level cache (1 MiB when the system does not say).
 size_t SecondLevelCacheBytes() {
   static const size_t bytes = [] {

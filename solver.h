@@ -199,9 +199,10 @@ class Solver {
   // wait for (radiosity() hands B out as a view of these). Shoot
   // multiplies by 1/A (double, so within 2 ulp of dividing by A): two
   // divisions an element (divpd + divsd) held the loop at the divider's
-  // pace, about 10 cycles; the room's R 256 shots took 10.4-13.9 us,
-  // 6.2-8.1 with the product, and result.csv of the shipped scenes stays
-  // the same to its 9 digits.
+  // pace, about 10 cycles; shooting the room at R 256 took 11.2 and
+  // 11.1 us a shot, 10.0 and 10.4 with the product (radiosity-master,
+  // quiet pairs), and result.csv of the shipped scenes stays the same to
+  // its 9 digits.
   struct ElemShot {
     glm::dvec3 b{0.0};
     double inv_area = 0;
