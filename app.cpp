@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 
 #include "clock.h"
 #include "connect.h"
@@ -28,12 +29,28 @@
 namespace {
 
 volatile std::sig_atomic_t g_stop = 0;  // the signal that stops the run
+timespec g_stop_at;                      // when it came: set before g_stop
+
+// Signals within this of the first are the same request: timeout(1)
+// sends its signal to the program and then to its process group, so the
+// program gets it twice microseconds apart (and left at once, exit 130,
+// when the two did not merge). A person pressing Ctrl-C again is slower.
+constexpr double kSameRequestS = 0.1;
+
+// clock_gettime is async-signal-safe (POSIX.1-2008); Clock is not.
+double SinceStopS() {
+  timespec now;
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return double(now.tv_sec - g_stop_at.tv_sec) + 1e-9 * double(now.tv_nsec - g_stop_at.tv_nsec);
+}
 
 void OnSignal(int sig) {
-  if (g_stop) {  // a second signal: leave at once
-    std::signal(sig, SIG_DFL);
+  if (g_stop) {
+    if (SinceStopS() < kSameRequestS) return;
+    std::signal(sig, SIG_DFL);  // a second request: leave at once
     std::raise(sig);
   }
+  clock_gettime(CLOCK_MONOTONIC, &g_stop_at);
   g_stop = sig;
 }
 

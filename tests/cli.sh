@@ -114,6 +114,19 @@ for sig in INT TERM; do
     fail "SIG$sig (exit $rc, $(tail -1 "$out.err"))"
   fi
 done
+# Under timeout(1) the run gets the signal twice, microseconds apart (to
+# the program, then to its process group): one request, not two.
+mkdir -p "$T/tmo"
+timeout -s INT 600 "$RADIOSITY" -o "$T/tmo" -e 1e-12 "$SCENES/room.obj" >"$T/tmo.out" 2>"$T/tmo.err" &
+PID=$!
+wait_shots tmo 1
+kill -INT "$PID"
+wait "$PID"; rc=$?
+if [ "$rc" -eq 0 ] && grep -q "stopped on request" "$T/tmo.err" && [ -s "$T/tmo/result.csv" ]; then
+  pass "SIGINT through timeout(1), twice at once: one request, exit 0, results written"
+else
+  fail "SIGINT through timeout(1) (exit $rc, $(tail -1 "$T/tmo.err"))"
+fi
 # A second signal leaves at once.
 # Two signals sent back to back can merge into one pending signal, so the
 # second comes once the first has stopped the run: result.csv is written,
@@ -128,6 +141,7 @@ bg_run twice -e 1e-12 --size 6000x6000 "$SCENES/room.obj"
 wait_shots twice 1
 kill -INT "$PID"
 wait_run 60 staged
+sleep 0.2  # a signal within 0.1 s of the first is the same request
 kill -INT "$PID"
 wait "$PID"; rc=$?
 [ "$rc" -ne 0 ] && pass "second SIGINT ends at once (exit $rc)" || fail "second SIGINT (exit $rc, want non-zero)"
