@@ -77,7 +77,6 @@ void Solver::PatchArrays() {
   const size_t n = mesh_.patches.size();
   patch_.resize(n);
   weight_.resize(n);
-  if (!pixel_df_.empty()) pixel_df_.resize(n);  // noise tracked: per patch too
   for (size_t p = 0; p < n; ++p) {
     const MeshFace& face = mesh_.faces[mesh_.patches[p].face];
     const glm::dvec3& rho = mesh_.Rho(face);
@@ -138,7 +137,7 @@ void Solver::Grow() {
   const size_t from = patch_of_.size(), n = mesh_.elems.size();
   elem_.resize(n);
   patch_of_.resize(n);
-  is_changed_.resize(n, 0);
+  changed_bits_.resize((n + 63) / 64, 0);
   if (pixel_ff_ > 0) noise_.resize(n, 0.0);
   if (track_direct_) direct_.resize(n, 0.0f);
   // Only added elements and their parents (divided since): O(divisions).
@@ -165,7 +164,6 @@ void Solver::TrackNoise(int resolution) {
   // centre, has delta form factor (2/R)² / π.
   pixel_ff_ = 4 / (M_PI * double(resolution) * resolution);
   noise_.resize(elem_.size(), 0.0);
-  pixel_df_.resize(mesh_.patches.size());
   HugeArrays();
 }
 
@@ -337,15 +335,20 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   // element's direction is taken as its patch centre's.
   const glm::dvec3 from = group ? group->center : mesh_.patch_center[size_t(p)];
   const glm::dvec3 axis = group ? group->normal : mesh_.faces[mesh_.patches[p].face].normal;
-  // A receiving patch's pixel delta form factor, once per shot, at its
-  // first form factor (its fsum still 0).
+  // A receiving patch's pixel delta form factor, once per run of its
+  // elements in the column (they are mostly neighbours in id), and again
+  // where it comes back after others: kept per patch in an array, its
+  // line was one more to wait for per patch at 10^5 patches.
+  int32_t pixel_q = -1;
+  double pixel_df = 0;
   auto pixel = [&](int32_t q) {
-    if (patch_[q].fsum == 0) {
+    if (q != pixel_q) {
       const glm::dvec3 d = mesh_.patch_center[size_t(q)] - from;
       const double len = glm::length(d);
-      pixel_df_[size_t(q)] = PixelFormFactor(pixel_ff_, len > 0 ? glm::dot(d, axis) / len : 0.0);
+      pixel_df = PixelFormFactor(pixel_ff_, len > 0 ? glm::dot(d, axis) / len : 0.0);
+      pixel_q = q;
     }
-    return pixel_df_[size_t(q)];
+    return pixel_df;
   };
   // Each patch reached is listed at its first form factor (its fsum still
   // 0) without a branch: written always, counted only then (whether an
@@ -378,7 +381,13 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
         __builtin_prefetch(&elem[size_t(a)], 1);
         const int32_t qa = patch_of[size_t(a)];
         if (qa >= 0) __builtin_prefetch(&patch[size_t(qa)], 1);
-        if (kExtras && noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
+        if (kExtras) {
+          // And what only a dividing run reads: the noise, the changed
+          // bits, the patch's centre (for its pixels' form factor).
+          if (noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
+          if (track_) __builtin_prefetch(&changed_bits_[size_t(a) / 64], 1);
+          if (noisy && qa >= 0) __builtin_prefetch(&mesh_.patch_center[size_t(qa)]);
+        }
       }
       const int32_t e = col[i].elem;
       int32_t q = patch_of[e];
@@ -479,7 +488,7 @@ void Solver::TakeChanged(std::vector<int32_t>* out) {
   track_ = true;
   out->swap(changed_);
   changed_.clear();
-  for (int32_t e : *out) is_changed_[size_t(e)] = 0;
+  for (int32_t e : *out) changed_bits_[size_t(e) / 64] = 0;
 }
 
 void Solver::Divided(const std::vector<int32_t>& elems) {
@@ -579,7 +588,6 @@ void Solver::Split(int p) {
     const size_t room = mesh_.patches.capacity();
     patch_.reserve(room), weight_.reserve(room);
     times_shot_.reserve(room);
-    if (!pixel_df_.empty()) pixel_df_.reserve(room);
   }
   patch_.resize(n);
   for (size_t q = from; q < n; ++q) {
@@ -590,7 +598,6 @@ void Solver::Split(int p) {
   }
   weight_.resize(n);
   times_shot_.resize(n, 0);
-  if (!pixel_df_.empty()) pixel_df_.resize(n);  // noise tracked
   // What each piece's leaves received, per channel, and the pieces' own
   // elements, divided ones complemented as Grow() keeps them.
   std::vector<glm::dvec3> got(pieces.size(), glm::dvec3(0.0));
@@ -638,7 +645,7 @@ void Solver::SplitsDone() {
 
 std::vector<glm::dvec3> Solver::TakeRadiosity() {
   FreeStorage(&patch_of_), FreeStorage(&patch_), FreeStorage(&touched_);
-  FreeStorage(&is_changed_), FreeStorage(&noise_), FreeStorage(&pixel_df_), FreeStorage(&direct_);
+  FreeStorage(&changed_bits_), FreeStorage(&noise_), FreeStorage(&direct_);
   FreeStorage(&changed_), FreeStorage(&times_shot_);
   FreeStorage(&weight_), FreeStorage(&group_dirty_), FreeStorage(&dirty_groups_), FreeStorage(&leaves_);
   queue_ = ShooterQueue();
