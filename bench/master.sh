@@ -105,15 +105,20 @@ echo "Division passes per size (radiosity-master --divide, R 256: a pass every 1
 echo "after the first 20 to 50, no waves, $DIVIDE_SHOTS shots): the share of the leaves a"
 echo "pass evaluated, and CPU ms per pass for the policy alone and with Divide and"
 echo "Solver::Divided, evaluating the leaves that may divide (now) and every leaf"
-echo "(before issue 14); the same divisions either way"
+echo "(before issue 14); the same divisions either way. Shoot: us per shot in that"
+echo "dividing run (one replay), which also sums each element's noise and marks it changed"
+echo "for the next pass: compare part 2's shoot, the same columns without. The columns were"
+echo "recorded on the undivided mesh, so each element divided since gives its share to its"
+echo "leaves, the slow way a worker's column in flight at a pass takes: many on the Cornell"
+echo "box (half its elements divide), few at 10^5 elements and more"
 echo
-echo "| scene | patches | elements | passes | divided | evaluated | policy ms | pass ms | every leaf: evaluated | policy ms | pass ms | policy every leaf/now |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+echo "| scene | patches | elements | passes | divided | evaluated | policy ms | pass ms | shoot us | every leaf: evaluated | policy ms | pass ms | policy every leaf/now |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for scene in $DIVIDE_SCENES; do
   now=$(./build/radiosity-master "$scene" "$DIVIDE_SHOTS" 256 --divide)
   all=$(./build/radiosity-master "$scene" "$DIVIDE_SHOTS" 256 --divide --every-leaf)
   echo "$now|$all" | awk -F'|' -v s="$(basename "$scene" .obj)" \
-    '{ printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %.1f |\n", s, $4, $5, $14, $15, $16, $17, $18, $36, $37, $38, $37 / ($17 > 0 ? $17 : 1e-9) }'
+    '{ printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %.1f |\n", s, $4, $5, $14, $15, $16, $17, $18, $10, $36, $37, $38, $37 / ($17 > 0 ? $17 : 1e-9) }'
 done
 
 echo
