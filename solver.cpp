@@ -382,10 +382,10 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
         const int32_t qa = patch_of[size_t(a)];
         if (qa >= 0) __builtin_prefetch(&patch[size_t(qa)], 1);
         if (kExtras) {
-          // And what only a dividing run reads: the noise, the changed
-          // bits, the patch's centre (for its pixels' form factor).
+          // And what only a dividing run reads: the noise and the patch's
+          // centre (for its pixels' form factor); the changed bits stay in
+          // the caches.
           if (noisy) __builtin_prefetch(&noise_[size_t(a)], 1);
-          if (track_) __builtin_prefetch(&changed_bits_[size_t(a) / 64], 1);
           if (noisy && qa >= 0) __builtin_prefetch(&mesh_.patch_center[size_t(qa)]);
         }
       }
