@@ -37,7 +37,8 @@ timespec g_stop_at;                      // when it came: set before g_stop
 // when the two did not merge). A person pressing Ctrl-C again is slower.
 constexpr double kSameRequestS = 0.1;
 
-// clock_gettime is async-signal-safe (POSIX.1-2008); Clock is not.
+// clock_gettime is async-signal-safe (POSIX.1-2008); MonotonicSeconds
+// (std::chrono) is not promised to be.
 double SinceStopS() {
   timespec now;
   clock_gettime(CLOCK_MONOTONIC, &now);
