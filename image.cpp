@@ -338,37 +338,23 @@ float AutoExposure(const ShadedMesh& mesh) {
     return std::isfinite(lum) && lum > 0 ? lum : 0.0;
   };
   // A vertex's weight: its share of the polygons round it, summed in the
-  // polygons' order. Not kept for every vertex (8 bytes each, 24 MB at 10^6
-  // elements, the master's peak at a dividing run's first picture): made
-  // again for a quarter of the vertices at a time whenever a walk needs
-  // them, each vertex's sum the same additions in the same order, so the
-  // same double. A polygon with no corner in the quarter is passed over
-  // before its area is computed.
+  // polygons' order. Kept for every vertex while this runs, 8 bytes each:
+  // made again for a quarter of the vertices at each walk below (d8ab6ac,
+  // to keep 6 of them out of the master's peak) they cost a pass over the
+  // polygons a walk, and the picture of a wave is made while the workers
+  // wait (app.cpp): 95-130 ms for 210,000 vertices, 27 with them kept
+  // (the master's dividing peak about 10 bytes an element higher:
+  // memory.h).
   const size_t nv = mesh.positions().size();
-  const size_t chunk = std::max<size_t>((nv + 3) / 4, 1);
-  std::vector<double> w;
-  w.reserve(std::min(chunk, nv));
-  // fn(i, weight) for each vertex i of some weight, in the order of i.
-  auto walk = [&](auto&& fn) {
-    for (size_t lo = 0; lo < nv; lo += chunk) {
-      const size_t hi = std::min(nv, lo + chunk);
-      w.assign(hi - lo, 0.0);
-      for (const auto& q : mesh.polys) {
-        bool touches = false;
-        for (int k = 0; k < PolySize(q); ++k) touches |= size_t(q[k]) - lo < hi - lo;
-        if (!touches) continue;
-        const double a = PolyArea(mesh, q);
-        if (!std::isfinite(a)) continue;
-        for (int k = 0; k < PolySize(q); ++k)
-          if (size_t(q[k]) - lo < hi - lo) w[q[k] - lo] += a / PolySize(q);
-      }
-      for (size_t i = lo; i < hi; ++i)
-        if (w[i - lo] > 0) fn(i, w[i - lo]);
-    }
-  };
+  std::vector<double> w(nv, 0.0);
+  for (const auto& q : mesh.polys) {
+    const double a = PolyArea(mesh, q);
+    if (!std::isfinite(a)) continue;
+    for (int k = 0; k < PolySize(q); ++k) w[size_t(q[k])] += a / PolySize(q);
+  }
   // Bins of luminance by the top 16 bits of the double (sign, exponent, 4
   // bits of mantissa: in the order of the values, as they are >= 0), of
-  // the vertices of some weight (the walks' vertices).
+  // the vertices of some weight.
   auto bin_of = [](double lum) {
     uint64_t bits;
     std::memcpy(&bits, &lum, sizeof bits);
@@ -377,13 +363,14 @@ float AutoExposure(const ShadedMesh& mesh) {
   std::vector<uint32_t> count(size_t(1) << 15, 0);
   double total = 0, brightest = 0;
   size_t weighted = 0;
-  walk([&](size_t i, double weight) {
+  for (size_t i = 0; i < nv; ++i) {
+    if (!(w[i] > 0)) continue;
     const double lum = lum_of(i);
-    total += weight;
+    total += w[i];
     brightest = std::max(brightest, lum);
     ++count[bin_of(lum)];
     ++weighted;
-  });
+  }
   // The weights summed in increasing (luminance, weight) up to the
   // percentile, a run of bins at a time (about 1/16 of the vertices each,
   // or one bin), sorted: the same sums in the same order as a sort of all
@@ -412,15 +399,15 @@ float AutoExposure(const ShadedMesh& mesh) {
   };
   for (size_t r = 0, lo = 0; r < runs.size() && !reached; lo = runs[r++].end) {
     const size_t hi = runs[r].end;
-    auto in_run = [&](size_t i) {
-      const size_t bin = bin_of(lum_of(i));
-      return bin >= lo && bin < hi;
+    // fn(i) for each vertex i of the run, in the order of i.
+    auto walk = [&](auto&& fn) {
+      for (size_t i = 0; i < nv; ++i)
+        if (w[i] > 0 && bin_of(lum_of(i)) - lo < hi - lo) fn(i);
     };
     // One bin of one luminance (the dark vertices' 0): its weights alone.
     double least = HUGE_VAL, most = 0;
     if (runs[r].vertices > run)
-      walk([&](size_t i, double) {
-        if (!in_run(i)) return;
+      walk([&](size_t i) {
         least = std::min(least, lum_of(i));
         most = std::max(most, lum_of(i));
       });
@@ -428,17 +415,13 @@ float AutoExposure(const ShadedMesh& mesh) {
     ws.clear();
     if (least == most) {
       ws.reserve(runs[r].vertices);
-      walk([&](size_t i, double weight) {
-        if (in_run(i)) ws.push_back(weight);
-      });
+      walk([&](size_t i) { ws.push_back(w[i]); });
       std::sort(ws.begin(), ws.end());
       for (double weight : ws)
         if (add(least, weight)) break;
     } else {
       lw.reserve(runs[r].vertices);
-      walk([&](size_t i, double weight) {
-        if (in_run(i)) lw.emplace_back(lum_of(i), weight);
-      });
+      walk([&](size_t i) { lw.emplace_back(lum_of(i), w[i]); });
       std::sort(lw.begin(), lw.end());
       for (const auto& [lum, weight] : lw)
         if (add(lum, weight)) break;
