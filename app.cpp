@@ -276,17 +276,26 @@ void MasterRun::Build() {
   if (solver_->Dark())  // a legal scene, but most likely a missing Ke
     Say("warning: " + opts_.scene_path + ": no face emits light (Ke); every B is 0");
   run_.wave_end = [this](int wave) {
-    auto shaded = Picture(solver_->radiosity(), {FrameName(wave)});
+    const auto shaded = Picture(solver_->radiosity(), {FrameName(wave)}).first;
     // The view shows the wave's end, and nothing of the next wave until
     // it is as far (a new wave starts again from the lights): the picture
-    // never goes back to a less converged one.
+    // never goes back to a less converged one. A copy: the picture's
+    // thread draws from this one meanwhile.
     if (view_) {
-      view_->Snapshot(solver_->shots(), [&] { return std::move(shaded.first); });
+      view_->Snapshot(solver_->shots(), [&] { return *shaded; });
       view_floor_ = last_unshot_;
     }
     if (opts_.verbosity >= 2)
       std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", wave, mesh_.LeafCount());
+    // With -j 0 no worker waits for the picture, and drawing it beside
+    // the next wave's first columns raised -j 0's dividing peak (memory.h)
+    // by 16 bytes an element.
+    if (opts_.workers == 0 && !opts_.Remote()) PicturesDone();
   };
+  // A wave's picture is drawn while the next wave shoots (on a 200,000-face
+  // scene it takes seconds, which the workers spent waiting), and is done
+  // before a division pass changes the points it reads.
+  run_.mesh_changes = [this] { PicturesDone(); };
   if (opts_.subdivide) {
     SubdivideOptions sub = opts_.sub;
     sub.max_elements = sub_limit_;
@@ -464,24 +473,29 @@ std::string MasterRun::FrameName(int wave) const {
 // The last wave's frame and final.png are the same picture: shaded and
 // rendered once (on a 200,000-face scene each costs seconds). HDR_PATH:
 // also the linear picture there, as Radiance RGBE.
-std::pair<ShadedMesh, float> MasterRun::Picture(const ElemB& b,
-                                                const std::vector<std::string>& paths,
-                                                const std::string& hdr_path) {
-  // One picture's pixels at a time (up to 18 bytes a pixel, image.h).
+std::pair<std::shared_ptr<const ShadedMesh>, float> MasterRun::Picture(
+    const ElemB& b, const std::vector<std::string>& paths, const std::string& hdr_path) {
+  PicturesDone();  // one picture's pixels at a time (up to 18 bytes a pixel, image.h)
+  auto shaded = std::make_shared<const ShadedMesh>(Shade(mesh_, b));
+  // Here, not on the thread: its arrays (about 12 bytes a vertex) gone
+  // before the next wave's solver arrays come, at the master's peak
+  // (memory.h), and before the picture's pixels.
+  const float exposure = AutoExposure(*shaded);
+  // Drawn once, the files encoded in turn on one thread (their buffers one
+  // at a time), while the run, or the rest of the outputs, go on.
+  writers_.Start([shaded, exposure, camera = camera_, width = opts_.width,
+                  height = opts_.height, paths, hdr_path, format = opts_.format](std::string* e) {
+    Image img;
+    Render(*shaded, camera, width, height, &img);
+    return WriteImage(img, exposure, paths, format, e) &&
+           (hdr_path.empty() || WriteRadianceHdr(img, hdr_path, e));
+  });
+  return {std::move(shaded), exposure};
+}
+
+void MasterRun::PicturesDone() {
   const std::string err = writers_.Wait();
   if (!err.empty()) Die(kExitFailure, err);
-  ShadedMesh shaded = Shade(mesh_, b);
-  // Its arrays gone before the picture's pixels come.
-  const float exposure = AutoExposure(shaded);
-  auto img = std::make_shared<Image>();
-  Render(shaded, camera_, opts_.width, opts_.height, img.get());
-  // Encoded once, the files in turn on one thread (their buffers one at
-  // a time, as before), while the run, or the rest of the outputs, go on.
-  writers_.Start([img, exposure, paths, hdr_path, format = opts_.format](std::string* e) {
-    return WriteImage(*img, exposure, paths, format, e) &&
-           (hdr_path.empty() || WriteRadianceHdr(*img, hdr_path, e));
-  });
-  return std::make_pair(std::move(shaded), exposure);
 }
 
 void MasterRun::Run() {
@@ -546,6 +560,8 @@ void MasterRun::WriteOutputs() {
                           "; no results written");
   }
 
+  // The last wave's picture drawn before the end's arrays come.
+  PicturesDone();
   // Nothing is shot or divided after the run: of the solver the outputs
   // read only B (copied out once the solver's other arrays are gone), and
   // of subdivision whether it was capped; the rest (some 60 and 14 bytes
@@ -556,12 +572,14 @@ void MasterRun::WriteOutputs() {
   subdivider_.reset();
   const std::vector<glm::dvec3> face_b = FaceRadiosity(mesh_, b);
   if (!WriteResultCsv(staging_.Path("result.csv"), scene_, face_b, &err)) Die(kExitFailure, err);
-  const auto shaded = Picture(b, {FrameName(r.waves), staging_.Path("final." + opts_.format)},
-                              staging_.Path("final.hdr"));
+  const auto picture = Picture(b, {FrameName(r.waves), staging_.Path("final." + opts_.format)},
+                               staging_.Path("final.hdr"));
+  const ShadedMesh& shaded = *picture.first;
+  const float exposure = picture.second;
   if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", r.waves, mesh_.LeafCount());
-  if (!WritePly(shaded.first, shaded.second, staging_.Path("result.ply"), &err) ||
-      !WriteGltf(shaded.first, shaded.second, staging_.Path("result.gltf"),
+  if (!WritePly(shaded, exposure, staging_.Path("result.ply"), &err) ||
+      !WriteGltf(shaded, exposure, staging_.Path("result.gltf"),
                  staging_.Path("result.bin"), &err))
     Die(kExitFailure, err);
   const std::string how = r.status == RunStatus::kConverged ? "converged"
@@ -581,13 +599,13 @@ void MasterRun::WriteOutputs() {
                            return WriteOfflineViewPage(
                                state,
                                [&](const FileSink& blob) {
-                                 return ViewMeshBlob(shaded.first, shaded.second, blob);
+                                 return ViewMeshBlob(shaded, exposure, blob);
                                },
                                put);
                          },
                          &err))
       Die(kExitFailure, err);
-    if (view_) view_->Finish(ViewMeshBlob(shaded.first, shaded.second), r.shots, how);
+    if (view_) view_->Finish(ViewMeshBlob(shaded, exposure), r.shots, how);
   }
   if (!opts_.converge.empty()) {
     // A reference must be converged: one cut short by -s, -t or a signal

@@ -87,12 +87,17 @@ class MasterRun {
   void OnSample(const Sample& s);
   void Note(const std::string& line, bool warning);
   std::string FrameName(int wave) const;
-  // Renders the solution `b` (per element) once and writes it to every
-  // path (and to hdr_path as Radiance RGBE, if given) on a thread of
-  // writers_, after the picture before it is written.
-  std::pair<ShadedMesh, float> Picture(const ElemB& b,
-                                       const std::vector<std::string>& paths,
-                                       const std::string& hdr_path = "");
+  // Shades the solution `b` (per element) and finds its exposure here,
+  // once, then draws and writes it to every path (and to hdr_path as
+  // Radiance RGBE, if given) on a thread of writers_, after the picture
+  // before it is written, while the run goes on. That thread reads the
+  // mesh's points (lent to the shaded mesh): the mesh must not change
+  // before PicturesDone().
+  std::pair<std::shared_ptr<const ShadedMesh>, float> Picture(const ElemB& b,
+                                                              const std::vector<std::string>& paths,
+                                                              const std::string& hdr_path = "");
+  // Waits for the pictures being drawn and written; dies if one failed.
+  void PicturesDone();
   void SaveCheckpoint(const RunState& state);
   ViewInfo ViewOf() const;  // what the browser view shows of this run
 

@@ -16,14 +16,16 @@
 // or the scene frame (with workers), the pictures at the end of a wave.
 // Measured at 1.06 M elements with shooter groups (the default): 263 to
 // 264 with -j 0 and 249 to 250 with -j 1 over 2 shots (336 and 336 at
-// 7afbefc, when the group search at start-up was the peak), but 397 and
-// 395 in a first wave that divided and split 263,927 patches into
-// 537,470: its picture (Shade's polygons and colours, AutoExposure's
-// walks) beside the adjacency and the solver grown for the children and
-// the pieces (401 and 406 at d8ab6ac, when AutoExposure kept a weight
-// and a bin per vertex; 412 and 418 at 597cf95, with the noise and
+// 7afbefc, when the group search at start-up was the peak), but 401 to
+// 404 and 404 in a first wave that divided and split 263,927 patches
+// into 537,470: its picture (Shade's polygons and colours, AutoExposure's
+// weights) beside the adjacency and the solver grown for the children
+// and the pieces (394 to 395 and 392 to 393 at 4f9cb58, when
+// AutoExposure made its weights again for every walk, a quarter of the
+// vertices at a time: 4 times its time; 401 and 406 at d8ab6ac, when it
+// kept a bin per vertex too; 412 and 418 at 597cf95, with the noise and
 // direct tracks kept through the picture: Solver::EndWave). The rate is
-// the highest, 397, with about 13% room, since subdivision's limit
+// the highest, 404, with about 11% room, since subdivision's limit
 // (app.cpp) takes it as the cost of every element (460 at d8ab6ac; 490
 // at 597cf95, from 429; 520 at 7afbefc, from that pass's 462 at
 // 0cd4817).

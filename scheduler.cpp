@@ -572,6 +572,11 @@ void Scheduler::Subdivide() {
   const long shots_in_wave = solver_->shots() - wave_start_;
   if (!sub_->Due(shots_in_wave) && !sub_->SplitDue(solver_->DirectDone())) return;
   SendNow();
+  if (opts_.mesh_changes) {
+    const double t = t_->Now();
+    opts_.mesh_changes();
+    idle_.Busy(IdleAccount::kPicture, t, t_->Now());
+  }
   const double t0 = MonotonicSeconds(), now = t_->Now();
   const long passes = sub_->passes();
   const bool over =

@@ -48,6 +48,10 @@ struct RunOptions {
   // Called at the end of every wave but the last (whose end is the run's),
   // before its radiosity is thrown away. May be empty.
   std::function<void(int wave)> wave_end;
+  // Called before a division pass changes the mesh: what still reads it
+  // from a wave_end (a picture drawn on another thread) is done when this
+  // returns. May be empty.
+  std::function<void()> mesh_changes;
   // Checkpoints: `checkpoint` (may be empty) is called every
   // `checkpoint_every` seconds between shots (0: never) and once when the
   // run stops, before the last log sample, with where the run stands.

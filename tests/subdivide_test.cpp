@@ -383,6 +383,44 @@ TEST(Subdivider, SharpShadowIsDividedAlongItsEdge) {
               plain.LeafCount(), m.LeafCount(), r.waves, near_n, far_n, adaptive_err, plain_err);
 }
 
+// A wave's picture is drawn on another thread while the next wave shoots
+// (app.cpp), from the mesh's points: the mesh stays as it was at the
+// wave's end until mesh_changes has been called, and a pass that divides
+// calls it first.
+TEST(Subdivider, TheMeshStaysUntilMeshChangesIsCalled) {
+  Scene s = ShadowScene();
+  MeshOptions mo;
+  mo.patch_size = 0.25;
+  Mesh m = MakeMesh(s, mo);
+  Solver solver(m, true);
+  Subdivider sub(&m, SubdivideOptions());
+  RunOptions o;
+  o.resolution = 128;
+  o.epsilon = 1e-3;
+  size_t drawn = 0;  // elements at the wave's end; 0: no picture being drawn
+  int pictures = 0, calls = 0;
+  o.wave_end = [&](int) {
+    drawn = m.elems.size();
+    ++pictures;
+  };
+  o.mesh_changes = [&] {
+    if (drawn) {
+      EXPECT_EQ(m.elems.size(), drawn) << "the mesh changed under a picture";
+    }
+    drawn = 0;
+    ++calls;
+  };
+  const RunResult r = RunSequential(&m, o, &solver, &sub, [&](const Sample&) {
+    if (drawn) {
+      EXPECT_EQ(m.elems.size(), drawn) << "the mesh changed under a picture";
+    }
+  });
+  ASSERT_EQ(r.status, RunStatus::kConverged);
+  EXPECT_GT(pictures, 0);
+  EXPECT_GT(m.LeafCount(), MakeMesh(s, mo).LeafCount());  // it divided
+  EXPECT_GE(calls, r.passes);
+}
+
 TEST(Subdivider, WithoutWavesOneWave) {
   Scene s = ShadowScene();
   MeshOptions o;
