@@ -290,12 +290,13 @@ void MasterRun::Build() {
     // With -j 0 no worker waits for the picture, and drawing it beside
     // the next wave's first columns raised -j 0's dividing peak (memory.h)
     // by 16 bytes an element.
-    if (opts_.workers == 0 && !opts_.Remote()) PicturesDone();
+    if (opts_.workers == 0 && !opts_.Remote()) Drawn();
   };
   // A wave's picture is drawn while the next wave shoots (on a 200,000-face
   // scene it takes seconds, which the workers spent waiting), and is done
-  // before a division pass changes the points it reads.
-  run_.mesh_changes = [this] { PicturesDone(); };
+  // before a division pass changes the points it reads; its encoding, not
+  // (the PNG of a small scene's picture takes longer than its drawing).
+  run_.mesh_changes = [this] { Drawn(); };
   if (opts_.subdivide) {
     SubdivideOptions sub = opts_.sub;
     sub.max_elements = sub_limit_;
@@ -483,14 +484,23 @@ std::pair<std::shared_ptr<const ShadedMesh>, float> MasterRun::Picture(
   const float exposure = AutoExposure(*shaded);
   // Drawn once, the files encoded in turn on one thread (their buffers one
   // at a time), while the run, or the rest of the outputs, go on.
-  writers_.Start([shaded, exposure, camera = camera_, width = opts_.width,
-                  height = opts_.height, paths, hdr_path, format = opts_.format](std::string* e) {
+  auto drawn = std::make_shared<std::promise<void>>();
+  drawn_ = drawn->get_future().share();
+  writers_.Start([shaded, exposure, drawn, camera = camera_, width = opts_.width,
+                  height = opts_.height, paths, hdr_path,
+                  format = opts_.format](std::string* e) mutable {
     Image img;
     Render(*shaded, camera, width, height, &img);
+    shaded.reset();  // not read again (nor its lent points)
+    drawn->set_value();
     return WriteImage(img, exposure, paths, format, e) &&
            (hdr_path.empty() || WriteRadianceHdr(img, hdr_path, e));
   });
   return {std::move(shaded), exposure};
+}
+
+void MasterRun::Drawn() {
+  if (drawn_.valid()) drawn_.wait();
 }
 
 void MasterRun::PicturesDone() {
@@ -561,7 +571,7 @@ void MasterRun::WriteOutputs() {
   }
 
   // The last wave's picture drawn before the end's arrays come.
-  PicturesDone();
+  Drawn();
   // Nothing is shot or divided after the run: of the solver the outputs
   // read only B (copied out once the solver's other arrays are gone), and
   // of subdivision whether it was capped; the rest (some 60 and 14 bytes

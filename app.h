@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <functional>
+#include <future>
 #include <list>
 #include <memory>
 #include <string>
@@ -92,10 +93,13 @@ class MasterRun {
   // Radiance RGBE, if given) on a thread of writers_, after the picture
   // before it is written, while the run goes on. That thread reads the
   // mesh's points (lent to the shaded mesh): the mesh must not change
-  // before PicturesDone().
+  // before Drawn().
   std::pair<std::shared_ptr<const ShadedMesh>, float> Picture(const ElemB& b,
                                                               const std::vector<std::string>& paths,
                                                               const std::string& hdr_path = "");
+  // Waits until the last picture is drawn (its files may still be being
+  // encoded and written).
+  void Drawn();
   // Waits for the pictures being drawn and written; dies if one failed.
   void PicturesDone();
   void SaveCheckpoint(const RunState& state);
@@ -105,6 +109,7 @@ class MasterRun {
   std::vector<Input> inputs_;  // what no output may replace
   Staging staging_;            // the outputs until they are all written
   Writers writers_;            // pictures being written into staging_
+  std::shared_future<void> drawn_;  // ready once the last picture is drawn
   RunOptions run_;  // opts_.run with the run's hooks
   Scene scene_;
   Camera camera_;
