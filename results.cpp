@@ -314,19 +314,22 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
     for (int v = mesh.faces[f].vbegin; v < mesh.faces[f].vend; ++v) face_of[v] = int(f);
     for (int v : mesh.DivideVerts(mesh.faces[f])) face_of[v] = int(f);
   }
-  auto normal_key = [&](int v, int k) {
-    return std::llround(mesh.faces[face_of[v]].normal[k] * 1e6);
+  // A face's key: its normal to 1e-6 and its material, made once a face.
+  struct FaceKey {
+    long long n[3];
+    int material;
+    bool operator==(const FaceKey& o) const {
+      return n[0] == o.n[0] && n[1] == o.n[1] && n[2] == o.n[2] && material == o.material;
+    }
   };
-  auto same = [&](int a, int b) {
-    return mesh.verts[a] == mesh.verts[b] &&
-           mesh.faces[face_of[a]].material == mesh.faces[face_of[b]].material &&
-           normal_key(a, 0) == normal_key(b, 0) && normal_key(a, 1) == normal_key(b, 1) &&
-           normal_key(a, 2) == normal_key(b, 2);
+  auto face_key = [&](int f) {
+    const MeshFace& mf = mesh.faces[size_t(f)];
+    return FaceKey{{std::llround(mf.normal[0] * 1e6), std::llround(mf.normal[1] * 1e6),
+                    std::llround(mf.normal[2] * 1e6)},
+                   mf.material};
   };
-  auto hash = [&](int v) {
-    return PointHash()(mesh.verts[v]) ^
-           size_t(normal_key(v, 0) ^ normal_key(v, 1) ^ normal_key(v, 2)) ^
-           size_t(mesh.faces[face_of[v]].material) * 101;
+  auto hash = [&](int v, const FaceKey& k) {
+    return PointHash()(mesh.verts[v]) ^ size_t(k.n[0] ^ k.n[1] ^ k.n[2]) ^ size_t(k.material) * 101;
   };
   // At most 3/4 full (the pair of 4-byte tables at the joining, face_of
   // and this, was the peak of the master's last picture at half full).
@@ -335,20 +338,55 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
   std::vector<int> first(slots, -1);  // a group's first vertex
   std::vector<int> group(mesh.verts.size());
   int groups = 0;
-  for (const MeshFace& f : mesh.faces) {
-    auto join = [&](int v) {
-      size_t i = hash(v) & (slots - 1);
-      while (first[i] >= 0 && !same(first[i], v)) i = (i + 1) & (slots - 1);
-      if (first[i] < 0) {
-        first[i] = v;
-        group[v] = groups++;
-      } else {
-        group[v] = group[first[i]];
+  // Some 64 vertices at a time (whole faces, in order): their slots
+  // fetched first, then the vertices found there, then each joined in
+  // turn (the same order, so the same groups). One at a time, each waited
+  // for its slot and then for the vertex in it, both anywhere in memory:
+  // Shade of boxes20000 (529,260 elements) took 158-197 ms, now 79-90.
+  struct Pending {
+    int v;
+    uint32_t key;  // in keys
+    size_t slot;
+  };
+  std::vector<Pending> batch;
+  std::vector<FaceKey> keys;
+  auto join_batch = [&] {
+    for (const Pending& x : batch)
+      if (first[x.slot] >= 0) {
+        __builtin_prefetch(&mesh.verts[size_t(first[x.slot])]);
+        __builtin_prefetch(&face_of[size_t(first[x.slot])]);
       }
+    for (const Pending& x : batch) {
+      const FaceKey& key = keys[x.key];
+      size_t i = x.slot;
+      // The same point on a face of the same key (its own face's vertices
+      // are not the same point).
+      while (first[i] >= 0 && !(mesh.verts[first[i]] == mesh.verts[x.v] &&
+                                face_key(face_of[first[i]]) == key))
+        i = (i + 1) & (slots - 1);
+      if (first[i] < 0) {
+        first[i] = x.v;
+        group[x.v] = groups++;
+      } else {
+        group[x.v] = group[first[i]];
+      }
+    }
+    batch.clear();
+    keys.clear();
+  };
+  for (size_t fi = 0; fi < mesh.faces.size(); ++fi) {
+    const MeshFace& f = mesh.faces[fi];
+    keys.push_back(face_key(int(fi)));
+    const uint32_t k = uint32_t(keys.size() - 1);
+    auto add = [&](int v) {
+      batch.push_back({v, k, hash(v, keys[k]) & (slots - 1)});
+      __builtin_prefetch(&first[batch.back().slot]);
     };
-    for (int v = f.vbegin; v < f.vend; ++v) join(v);
-    for (int v : mesh.DivideVerts(f)) join(v);
+    for (int v = f.vbegin; v < f.vend; ++v) add(v);
+    for (int v : mesh.DivideVerts(f)) add(v);
+    if (batch.size() >= 64) join_batch();
   }
+  join_batch();
   std::vector<int>().swap(first);
   std::vector<int>().swap(face_of);
   // Most groups are one vertex, whose sums are its own (0 + x is x): sums
