@@ -18,6 +18,7 @@
 #include "check.h"
 #include "exr.h"
 #include "files.h"
+#include "textnum.h"
 
 namespace {
 
@@ -500,23 +501,28 @@ bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
       s.clear();
       return ok;
     };
-    char line[128];
     for (size_t i = 0; i < mesh.positions().size(); ++i) {
       const glm::dvec3& p = mesh.positions()[i];
       const glm::vec3& c = mesh.colors[i];
-      // %.9g: a float survives the round trip through text.
-      std::snprintf(line, sizeof line, "%.9g %.9g %.9g %d %d %d\n", double(float(p.x)),
-                    double(float(p.y)), double(float(p.z)), Encode(c.r, exposure),
-                    Encode(c.g, exposure), Encode(c.b, exposure));
-      s += line;
+      // "%.9g %.9g %.9g %d %d %d\n": a float survives the round trip.
+      for (int k = 0; k < 3; ++k) {
+        AppendG9(&s, double(float(p[k])));
+        s += ' ';
+      }
+      for (int k = 0; k < 3; ++k) {
+        AppendInt(&s, Encode(c[k], exposure));
+        s += k < 2 ? ' ' : '\n';
+      }
       if (!flush(1 << 20)) return false;
     }
     for (const auto& q : mesh.polys) {
-      if (q[3] < 0)
-        std::snprintf(line, sizeof line, "3 %d %d %d\n", q[0], q[1], q[2]);
-      else
-        std::snprintf(line, sizeof line, "4 %d %d %d %d\n", q[0], q[1], q[2], q[3]);
-      s += line;
+      const int n = q[3] < 0 ? 3 : 4;
+      AppendInt(&s, n);
+      for (int k = 0; k < n; ++k) {
+        s += ' ';
+        AppendInt(&s, q[k]);
+      }
+      s += '\n';
       if (!flush(1 << 20)) return false;
     }
     return flush(0);

@@ -14,6 +14,7 @@
 #include "check.h"
 #include "files.h"
 #include "surface.h"
+#include "textnum.h"
 
 namespace {
 
@@ -136,12 +137,16 @@ bool CsvSplit(const std::string& line, std::vector<std::string>* cols) {
 bool WriteResultCsv(const std::string& path, const Scene& scene,
                     const std::vector<glm::dvec3>& face_b, std::string* err) {
   std::string text = "face,object,area,B_r,B_g,B_b\n";
-  char buf[128];
   for (size_t i = 0; i < scene.faces.size(); ++i) {
     const Face& fc = scene.faces[i];
-    std::snprintf(buf, sizeof buf, ",%.9g,%.9g,%.9g,%.9g\n", fc.area, face_b[i].r, face_b[i].g,
-                  face_b[i].b);
-    text += std::to_string(fc.index) + "," + CsvField(scene.objects[fc.object]) + buf;
+    AppendInt(&text, fc.index);
+    text += ',';
+    text += CsvField(scene.objects[fc.object]);
+    for (double v : {fc.area, face_b[i].r, face_b[i].g, face_b[i].b}) {
+      text += ',';
+      AppendG9(&text, v);
+    }
+    text += '\n';
   }
   return WriteFileAtomic(path, text, err);
 }
