@@ -290,7 +290,7 @@ void MasterRun::Build() {
     // With -j 0 no worker waits for the picture, and drawing it beside
     // the next wave's first columns raised -j 0's dividing peak (memory.h)
     // by 16 bytes an element.
-    if (opts_.workers == 0 && !opts_.Remote()) Drawn();
+    if (opts_.Alone()) Drawn();
   };
   // A wave's picture is drawn while the next wave shoots (on a 200,000-face
   // scene it takes seconds, which the workers spent waiting), and is done
@@ -345,7 +345,7 @@ void MasterRun::StartWorkers() {
   run_.fallback = [this] {
     return std::make_unique<InProcessTransport>(mesh_, run_.resolution, run_.rotate, run_.seed);
   };
-  if (opts_.workers == 0 && !opts_.Remote()) {
+  if (opts_.Alone()) {
     transport_ = run_.fallback();
     return;
   }

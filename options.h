@@ -49,6 +49,8 @@ struct Options {
   int view_port = 0;
   // Workers from -H or --listen, beside or instead of the -j local ones.
   bool Remote() const { return !hosts.empty() || !listen.empty(); }
+  // -j 0 and no remote workers: the master computes every column itself.
+  bool Alone() const { return workers == 0 && !Remote(); }
 
   std::string checkpoint_file, resume_file;
   double checkpoint_every = 30;
