@@ -22,6 +22,7 @@
 #include "inprocess.h"
 #include "memory.h"
 #include "pool.h"
+#include "pool_thread.h"
 #include "ssh.h"
 #include "surface.h"
 #include "worker.h"
@@ -399,7 +400,9 @@ void MasterRun::StartWorkers() {
     std::fprintf(stderr, "radiosity: listening for workers on %s\n", bound.c_str());
     pool->AddSource(std::move(listener));
   }
-  transport_ = std::move(pool);
+  auto threaded = std::make_unique<ThreadedPool>(std::move(pool));
+  pool_thread_ = threaded.get();
+  transport_ = std::move(threaded);
 }
 
 void MasterRun::Resume() {
@@ -513,7 +516,9 @@ void MasterRun::Run() {
                       [this](const Sample& s) { OnSample(s); },
                       [this](const std::string& line, bool warning) { Note(line, warning); });
   transport_->Shutdown();
+  const double pool_cpu = pool_thread_ ? pool_thread_->CpuSeconds() : 0;
   transport_.reset();  // with -j 0 the hemicube's buffers, freed before the pictures
+  pool_thread_ = nullptr;
   ReleaseEdges(&mesh_);  // and subdivision's edge maps: nothing is divided after the run
   progress_->Finish();
   const RunResult& r = result_;
@@ -526,6 +531,8 @@ void MasterRun::Run() {
                  r.distribute_s, r.receive_s, r.shoot_s, r.wait_s, r.joined, r.lost, r.columns,
                  r.worker_s, r.stale, double(r.bytes_sent) / std::max(1L, r.shots),
                  double(r.bytes_received) / std::max(1L, r.shots));
+  if (opts_.verbosity >= 2 && pool_cpu > 0)
+    std::fprintf(stderr, "radiosity: pool thread: %.3f s CPU (reading, decoding, writing)\n", pool_cpu);
   if (opts_.verbosity >= 2)
     for (const RunResult::Worker& w : r.workers)
       std::fprintf(stderr,

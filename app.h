@@ -123,6 +123,7 @@ class MasterRun {
   std::unique_ptr<Subdivider> subdivider_;
   long built_ = 0;  // elements as built, before dividing
   std::unique_ptr<Transport> transport_;
+  class ThreadedPool* pool_thread_ = nullptr;  // transport_, when workers are processes
   long sub_limit_ = 0;  // elements subdivision may reach: kMaxElements, or what memory allows
   RunResult result_;
   std::unique_ptr<ViewServer> view_;  // --view

@@ -170,7 +170,10 @@ WorkerPool::~WorkerPool() {
 
 double WorkerPool::Clk() const { return clock_->Now() - epoch_; }
 
-double WorkerPool::Now() { return joined_at_ < 0 ? 0 : Clk() - joined_at_; }
+double WorkerPool::Now() {
+  const double joined = joined_at_.load(std::memory_order_relaxed);
+  return joined < 0 ? 0 : Clk() - joined;
+}
 
 void WorkerPool::Add(std::unique_ptr<Conn> conn, const std::string& name) {
   Worker w;

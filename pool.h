@@ -5,6 +5,7 @@
 #ifndef RADIOSITY_POOL_H
 #define RADIOSITY_POOL_H
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -119,7 +120,8 @@ class WorkerPool : public Transport {
   void Send(std::vector<WorkerEvent>* events) override;
   // The run's clock: 0 until the first worker joins, so that waiting for
   // workers (connect-back, ssh set-up, start-up) does not count against
-  // -t; the deadlines go by the pool's own clock.
+  // -t; the deadlines go by the pool's own clock. Another thread may ask
+  // while this one polls (ThreadedPool), when the clock is thread-safe.
   double Now() override;
   uint64_t BytesSent() const override { return sent_; }
   uint64_t BytesReceived() const override { return received_; }
@@ -188,7 +190,7 @@ class WorkerPool : public Transport {
   std::vector<int> hear_;   // the workers of an fd that fired (Poll)
   uint64_t sent_ = 0, received_ = 0;
   double epoch_;
-  double joined_at_ = -1;  // Clk() when the first worker joined
+  std::atomic<double> joined_at_{-1};  // Clk() when the first worker joined (Now)
 };
 
 #endif

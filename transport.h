@@ -73,6 +73,12 @@ class Transport {
     spare_.pop_back();
     return ff;
   }
+  // Every list handed back so far (to pass on to a transport inside).
+  std::vector<std::vector<FormFactor>> TakeSpares() {
+    std::vector<std::vector<FormFactor>> all;
+    all.swap(spare_);
+    return all;
+  }
 
  private:
   // Columns decoded in one Poll before any is shot each take one; more
