@@ -68,10 +68,43 @@ void SimTransport::Assign(int w, const proto::Assignment& a) {
   sent_ += frame.size();
   Event ev{Event::kSend, w, frame.size(), Event::kWork};
   ev.a = a;
-  Schedule(Now(), ev);
+  const double t = Now();
+  if (opts_.pool_thread) {
+    // Handed over (an eventfd write when the pool thread sleeps), then
+    // written by it.
+    if (!handed_ && pool_free_ <= t) io_owed_ += opts_.io.write_s;
+    handed_ = true;
+    Schedule(PoolWork(t, opts_.io.write_s), ev);
+    return;
+  }
+  Schedule(t, ev);
   Worker& wk = workers_[size_t(w)];
   unsent_ += wk.given != turn_;
   wk.given = turn_;
+}
+
+double SimTransport::PoolWork(double at, double cpu) {
+  if (at > pool_free_) cpu += opts_.wakeup_s;  // it slept in epoll_wait
+  pool_s_ += cpu;
+  if (opts_.host_cores > 0) {
+    int busy = 2;  // the master and this thread
+    for (const Worker& w : workers_) busy += w.busy;
+    if (busy > opts_.host_cores) cpu *= double(busy) / opts_.host_cores;
+  }
+  pool_free_ = std::max(at, pool_free_) + cpu;
+  return pool_free_;
+}
+
+proto::Column SimTransport::Decode(const Event& ev) {
+  reader_.Append(ev.frame.data(), ev.frame.size());
+  proto::Msg type;
+  std::string_view payload;
+  std::string err;
+  CHECK(reader_.Next(&type, &payload, &err) == proto::FrameReader::kFrame);
+  proto::Column c;
+  c.ff = Spare();
+  CHECK(type == proto::Msg::kColumn && proto::DecodeColumn(payload, &c, &err));
+  return c;
 }
 
 void SimTransport::Divide(const std::vector<int32_t>& elems) {
@@ -172,7 +205,8 @@ void SimTransport::Process(Event& ev) {
     return;
   }
   Worker& wk = workers_[ev.worker];
-  if (wk.crashed && ev.kind != Event::kColumn && ev.kind != Event::kLost)
+  if (wk.crashed && ev.kind != Event::kColumn && ev.kind != Event::kDecoded &&
+      ev.kind != Event::kLost)
     return;  // into the void
   switch (ev.kind) {
     case Event::kUp: {  // (what a crashed worker's link held is lost with it)
@@ -199,9 +233,32 @@ void SimTransport::Process(Event& ev) {
       // Noticed like a closed connection: after what it had already sent.
       Schedule(std::max(now_ + opts_.latency_s, wk.last_arrival), {Event::kLost, ev.worker});
       return;
-    case Event::kJoin:
     case Event::kColumn:
+      if (opts_.pool_thread) {
+        // Its CPU is the pool thread's, not the master's (this runs
+        // between the master's charges).
+        const bool fixed = opts_.master_cost_s >= 0;
+        const double c0 = fixed ? 0 : ThreadCpuSeconds();
+        Event d{Event::kDecoded, ev.worker, ev.bytes};
+        d.column = Decode(ev);
+        const double cpu = fixed ? 0 : ThreadCpuSeconds() - c0;
+        Schedule(PoolWork(now_, cpu + opts_.io.epoll_s + opts_.io.read_s), std::move(d));
+        return;
+      }
+      inbox_.push_back(std::move(ev));
+      return;
     case Event::kLost:
+      // After its columns that the pool thread is still decoding (then:
+      // deferred once already, behind all of them).
+      if (opts_.pool_thread && pool_free_ > now_ && ev.then != Event::kLost) {
+        ev.then = Event::kLost;
+        Schedule(pool_free_, std::move(ev));
+        return;
+      }
+      inbox_.push_back(std::move(ev));
+      return;
+    case Event::kJoin:
+    case Event::kDecoded:
       inbox_.push_back(std::move(ev));
       return;
     default:  // kEdit: the workers share the master's mesh
@@ -215,7 +272,7 @@ void SimTransport::Advance(double* master_cpu, double until, bool stop_on_arriva
     if (master_cpu ? *master_cpu <= 0 : now_ >= until) return;
     if (stop_on_arrival && !inbox_.empty()) return;
     // Speeds are constant until the next event, completion or the end.
-    int busy = master_cpu != nullptr;
+    int busy = (master_cpu != nullptr) + (opts_.pool_thread && pool_free_ > now_);
     for (const Worker& w : workers_) busy += w.busy;
     const double share =
         opts_.host_cores > 0 && busy > opts_.host_cores ? double(opts_.host_cores) / busy : 1.0;
@@ -253,6 +310,7 @@ void SimTransport::Charge() {
   cpu += io_owed_ + opts_.io.write_s * unsent_;
   io_owed_ = 0;
   unsent_ = 0;
+  handed_ = false;
   ++turn_;
   master_s_ += cpu;
   Advance(&cpu, 0, false);
@@ -277,12 +335,15 @@ void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
       Advance(&wake, 0, false);
     }
   }
-  // Charged at the next turn: this epoll_wait, and a read per worker heard.
-  io_owed_ += opts_.io.epoll_s;
-  for (const Event& ev : inbox_) {
-    Worker& wk = workers_[size_t(ev.worker)];
-    if (wk.heard != turn_) io_owed_ += opts_.io.read_s;
-    wk.heard = turn_;
+  // Charged at the next turn: this epoll_wait, and a read per worker heard
+  // (the pool thread's, with one).
+  if (!opts_.pool_thread) {
+    io_owed_ += opts_.io.epoll_s;
+    for (const Event& ev : inbox_) {
+      Worker& wk = workers_[size_t(ev.worker)];
+      if (wk.heard != turn_) io_owed_ += opts_.io.read_s;
+      wk.heard = turn_;
+    }
   }
   // From here on it is the master's work again: decoding what arrived.
   mark_ = ThreadCpuSeconds();
@@ -299,17 +360,12 @@ void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
         wk.lost = true;
         events->push_back({WorkerEvent::kLost, ev.worker, {}, "crashed (simulated)"});
         break;
-      case Event::kColumn: {
+      case Event::kColumn:
+      case Event::kDecoded: {
         received_ += ev.bytes;
         ++wk.columns;
-        reader_.Append(ev.frame.data(), ev.frame.size());
-        proto::Msg type;
-        std::string_view payload;
-        std::string err;
-        CHECK(reader_.Next(&type, &payload, &err) == proto::FrameReader::kFrame);
         WorkerEvent out{WorkerEvent::kColumn, ev.worker, {}, ""};
-        out.column.ff = Spare();
-        CHECK(type == proto::Msg::kColumn && proto::DecodeColumn(payload, &out.column, &err));
+        out.column = ev.kind == Event::kDecoded ? std::move(ev.column) : Decode(ev);
         events->push_back(std::move(out));
         break;
       }

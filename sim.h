@@ -22,6 +22,17 @@
 //    events also pays `wakeup_s` when one wakes it, as a real one does,
 //    and every turn pays the system calls a real one makes (`io`): an
 //    epoll_wait, a read per worker heard, a write per worker given work.
+//  * With pool_thread (the program's ThreadedPool), the master's system
+//    calls and decoding are another thread's: a column that arrives is
+//    read and decoded on the pool thread's own timeline (its decoding's
+//    measured CPU, an epoll_wait and a read, and a wake-up when that
+//    thread was idle) and reaches the master when that is done; an
+//    assignment is written there too (a write) and enters the medium
+//    then. The master pays for its own work, an eventfd write when it
+//    hands orders to an idle pool thread, and its wake-ups. The pool
+//    thread has a core of its own, unless host_cores > 0, where it counts
+//    among the busy while it works and its costs are stretched by the
+//    share of the moment it starts them.
 //  * The master's link is one shared medium that all frames, both ways,
 //    cross one after another (FIFO by the time they are sent): a frame of
 //    B bytes holds it 8B / bandwidth seconds, then arrives `latency` later.
@@ -102,6 +113,9 @@ struct SimOptions {
   struct Io {
     double epoll_s = 0, read_s = 0, write_s = 0;
   } io;
+  // The master's I/O on a thread of its own, as the program does it
+  // (pool_thread.h); false: on the master's, as before it.
+  bool pool_thread = true;
   // The columns' parameters, as RunOptions has them.
   int resolution = 256;
   bool rotate = true;
@@ -136,6 +150,7 @@ class SimTransport : public Transport {
 
   long Columns(int w) const { return workers_[w].columns; }  // delivered to the master
   double MasterSeconds() const { return master_s_; }  // charged to the master so far
+  double PoolSeconds() const { return pool_s_; }  // charged to the pool thread so far
 
  private:
   struct Event {
@@ -151,12 +166,14 @@ class SimTransport : public Transport {
       kLost,    // the master learns of it
       kRate,    // a slowdown begins or ends: speeds change
       kUp,      // a worker's frame has crossed its own link: onto the medium
+      kDecoded, // the pool thread has read and decoded a column: to the master
     } kind;
     int worker;
     size_t bytes = 0;     // of the frame, for the medium and the counts
     Kind then = kSend;    // kSend: what its arrival is (kWork, kEdit, kScene)
     proto::Assignment a{};  // kSend, kWork
     std::string frame{};    // kColumn
+    proto::Column column{}; // kDecoded
   };
   struct Worker {
     bool joined = false, lost = false;  // as the master was told
@@ -186,6 +203,11 @@ class SimTransport : public Transport {
   // the first frame at the master.
   void Advance(double* master_cpu, double until, bool stop_on_arrival);
   void Process(Event& ev);
+  // The pool thread does `cpu` seconds of work from `at` on (after waking,
+  // if it was idle); returns when it is done.
+  double PoolWork(double at, double cpu);
+  // A column's frame decoded as the master would, into a recycled list.
+  proto::Column Decode(const Event& ev);
   void Start(int w);
   void Finish(int w);
 
@@ -211,6 +233,9 @@ class SimTransport : public Transport {
   size_t ready_bytes_;       // a worker's hello and ready frames
   uint64_t sent_ = 0, received_ = 0;
   double master_s_ = 0;
+  double pool_free_ = 0;  // when the pool thread is next idle (pool_thread)
+  double pool_s_ = 0;
+  bool handed_ = false;   // orders handed to the pool thread this turn
 };
 
 #endif

@@ -200,19 +200,21 @@ TEST(Sim, TheMasterIsChargedItsWork) {
 struct Charged {
   double master;
   long columns;
+  double pool, seconds;  // charged to the pool thread; the run's time
 };
 Charged HundredShots(Mesh& m, int workers, double master_cost, double wake,
-                     const SimOptions::Io& io = {}) {
+                     const SimOptions::Io& io = {}, bool pool_thread = true) {
   SimOptions o = Fixed(workers);
   o.master_cost_s = master_cost;
   o.wakeup_s = wake;
   o.io = io;
+  o.pool_thread = pool_thread;
   SimTransport t(m, o);
   RunResult r = Simulate(m, Shots(100), &t);
   EXPECT_EQ(r.shots, 100);
   long delivered = 0;
   for (int w = 0; w < workers; ++w) delivered += t.Columns(w);
-  return {t.MasterSeconds(), delivered};
+  return {t.MasterSeconds(), delivered, t.PoolSeconds(), r.seconds};
 }
 
 // A master that waits for its one worker sleeps before each column and
@@ -236,10 +238,11 @@ TEST(Sim, AMasterThatSleptPaysItsWakeUp) {
 // turn. One worker, the master faster: each column is heard alone and
 // answered by one assignment. 8 workers behind a busy master: columns of
 // several workers at a Poll, a read each, and fewer Polls than shots.
+// Without a pool thread (the master reads and writes on its own).
 TEST(Sim, TheMastersSystemCallsAreCharged) {
   Mesh m = BoxMesh();
   auto run = [&](int workers, double cost, SimOptions::Io io) {
-    return HundredShots(m, workers, cost, 0, io);
+    return HundredShots(m, workers, cost, 0, io, false);
   };
   const double c = 0.01 * kCost;
   const Charged none = run(1, 0, {});
@@ -258,6 +261,30 @@ TEST(Sim, TheMastersSystemCallsAreCharged) {
   EXPECT_LT(n_polls, 100);
   EXPECT_GT(n_reads, n_polls);
   EXPECT_LE(n_reads, double(busy.columns) + 8 + 0.5);
+}
+
+// With one, the reads and epoll_waits are the pool thread's; the master
+// pays an eventfd write when it hands orders to it idle, and a master
+// that its system calls held back keeps more workers busy.
+TEST(Sim, WithAPoolThreadTheSystemCallsAreItsOwn) {
+  Mesh m = BoxMesh();
+  const double c = 0.01 * kCost;
+  const Charged none = HundredShots(m, 1, 0, 0, {});
+  const Charged io = HundredShots(m, 1, 0, 0, {c, c, 0});
+  EXPECT_EQ(io.master, none.master);
+  EXPECT_NEAR(io.pool - none.pool, 2 * c * double(none.columns), 2 * c);
+  // One worker: the pool thread is idle at every hand-over.
+  const Charged write = HundredShots(m, 1, 0, 0, {0, 0, c});
+  EXPECT_GE(write.master - none.master, c * double(none.columns - 3));
+  EXPECT_LE(write.master - none.master, c * double(none.columns + 1));
+  EXPECT_GE(write.pool - none.pool, c * double(none.columns));
+  // 8 workers, and a master that can shoot 10 workers' columns but with
+  // its reads (as much again) only 5: with the pool thread it keeps up.
+  const SimOptions::Io slow{0, 0.1 * kCost, 0};
+  const Charged alone = HundredShots(m, 8, 0.1 * kCost, 0, slow, false);
+  const Charged helped = HundredShots(m, 8, 0.1 * kCost, 0, slow, true);
+  EXPECT_LT(helped.seconds, 0.8 * alone.seconds);
+  EXPECT_LT(helped.master, 0.6 * alone.master);
 }
 
 // A master slower than its workers stops feeding them: the columns it has
