@@ -20,8 +20,9 @@
 #include "../worker.h"
 
 int main(int argc, char** argv) {
-  if (argc != 2 || std::strcmp(argv[1], "--worker") != 0) {
-    std::fprintf(stderr, "usage: radiosity --worker-cmd %s SCENE.obj (started as: %s --worker)\n",
+  const bool sleep = argc == 3 && std::strcmp(argv[1], "--sleep") == 0;
+  if (argc != 2 + sleep || std::strcmp(argv[1 + sleep], "--worker") != 0) {
+    std::fprintf(stderr, "usage: radiosity --worker-cmd '%s [--sleep]' SCENE.obj (started as: %s [--sleep] --worker)\n",
                  argv[0], argv[0]);
     return 2;
   }
@@ -49,7 +50,7 @@ int main(int argc, char** argv) {
     *coded = memo[size_t(a.patch)];
   };
   std::string err;
-  const int status = RunWorker(0, 1, &err, column, /*spin=*/true);
+  const int status = RunWorker(0, 1, &err, column, /*spin=*/!sleep);
   if (status != 0) std::fprintf(stderr, "radiosity-feed: worker: %s\n", err.c_str());
   return status;
 }

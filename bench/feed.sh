@@ -2,10 +2,14 @@
 # The master at a cluster's rate (issue 17), as a Markdown table on stdout.
 # A real master (`radiosity -j 1 -v --no-subdivide`) is fed by
 # build/radiosity-feed, a worker that answers each assignment at once with
-# a real column of the scene computed in advance and spins rather than
-# sleeps while it waits: the master never waits for a column, as with a
-# hundred busy workers, and its own breakdown (distributing, receiving,
-# shooting, per shot) is what bounds the speedup. The worker's time per
+# a real column of the scene computed in advance: the master never waits
+# for a column, as with a hundred busy workers, and its own thread's
+# breakdown (distributing, receiving, shooting, per shot) is what bounds
+# the speedup. Its pool thread (reading, decoding, writing; pool_thread.h)
+# is shown beside it, CPU per shot. The feed sleeps while it waits for
+# work (--sleep): the master's two threads need this machine's two cores,
+# and a feed spinning on one of them put them on one core; waking the feed
+# costs the pool thread, which writes to it. FEED_SPIN=1 spins, as before. The worker's time per
 # column comes from a real `-j 1` run of the same scene; max speedup is
 # the one over the other. BEFORE (a radiosity binary speaking the same
 # protocol) is run the same way, back to back; each figure is the run with
@@ -20,25 +24,30 @@ SCENES=${SCENES:-room maze cornell blender}
 RES=${RES:-256}
 ROUNDS=${ROUNDS:-3}
 SHOTS=${SHOTS:-3000}
+FEED="build/radiosity-feed --sleep"
+[ -n "$FEED_SPIN" ] && FEED=build/radiosity-feed
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 # BIN SCENE R FEED: the breakdown of the least master time of ROUNDS runs,
-# "distribute receive shoot shots columns worker_s" (seconds, counts).
+# "distribute receive shoot columns worker_s pool_s" (seconds,
+# counts; pool_s "-" without a pool thread).
 best() {
   i=0
   while [ $i -lt "$ROUNDS" ]; do
     if [ "$4" = feed ]; then
-      "$1" -v -j 1 --queue 30 --worker-cmd build/radiosity-feed -r "$3" -s "$SHOTS" --no-subdivide \
+      "$1" -v -j 1 --queue 30 --worker-cmd "$FEED" -r "$3" -s "$SHOTS" --no-subdivide \
         -o "$out/run" "scenes/$2.obj" 2>"$out/err" >/dev/null
     else
       "$1" -v -j 1 -r "$3" -s 500 --no-subdivide -o "$out/run" "scenes/$2.obj" 2>"$out/err" >/dev/null
     fi
-    sed -n 's/^radiosity: master: \([0-9.]*\) s distributing, \([0-9.]*\) s receiving, \([0-9.]*\) s shooting.* \([0-9]*\) columns in \([0-9.]*\) s.*/\1 \2 \3 \4 \5/p' "$out/err"
+    pool=$(sed -n 's/^radiosity: pool thread: \([0-9.]*\) s CPU.*/\1/p' "$out/err")
+    sed -n 's/^radiosity: master: \([0-9.]*\) s distributing, \([0-9.]*\) s receiving, \([0-9.]*\) s shooting.* \([0-9]*\) columns in \([0-9.]*\) s.*/\1 \2 \3 \4 \5/p' "$out/err" |
+      sed "s/\$/ ${pool:--}/"
     i=$((i + 1))
   done | awk '$4 > 0 { t = $1 + $2 + $3; if (!n++ || t < bt) { bt = t; b = $0 } } END { if (n) print b }'
 }
-echo "| scene | R | master | distribute us | receive us | shoot us | master us/shot | worker us/column | max speedup |"
-echo "|---|---|---|---|---|---|---|---|---|"
+echo "| scene | R | master | distribute us | receive us | shoot us | master us/shot | pool thread CPU us/shot | worker us/column | max speedup |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
 for s in $SCENES; do
   for r in $RES; do
     w=$(best ./radiosity "$s" "$r" real)
@@ -51,7 +60,8 @@ for s in $SCENES; do
       [ -n "$f" ] || { echo "bench/feed.sh: $s R $r ($m): no breakdown; $(tail -1 "$out/err")" >&2; exit 1; }
       echo "$f" | awk -v s="$s" -v r="$r" -v m="$m" -v col="$col" '{
         n = $4; d = 1e6 * $1 / n; rc = 1e6 * $2 / n; sh = 1e6 * $3 / n; t = d + rc + sh
-        printf "| %s | %s | %s | %.1f | %.1f | %.1f | %.1f | %d | %.0f |\n", s, r, m, d, rc, sh, t, col, col / t }'
+        pool = $6 == "-" ? "-" : sprintf("%.1f", 1e6 * $6 / n)
+        printf "| %s | %s | %s | %.1f | %.1f | %.1f | %.1f | %s | %d | %.0f |\n", s, r, m, d, rc, sh, t, pool, col, col / t }'
     done
   done
 done
