@@ -400,7 +400,7 @@ void MasterRun::StartWorkers() {
     std::fprintf(stderr, "radiosity: listening for workers on %s\n", bound.c_str());
     pool->AddSource(std::move(listener));
   }
-  auto threaded = std::make_unique<ThreadedPool>(std::move(pool));
+  auto threaded = std::make_unique<ThreadedPool>(std::move(pool), mesh_);
   pool_thread_ = threaded.get();
   transport_ = std::move(threaded);
 }
@@ -452,7 +452,10 @@ void MasterRun::OnSample(const Sample& s) {
       view_floor_ = HUGE_VAL;
     }
   }
-  if (opts_.verbosity == 1) progress_->Update(s, with_ref ? &rms : nullptr, with_ref ? &rel : nullptr);
+  if (opts_.verbosity == 1) {
+    std::lock_guard<std::mutex> lock(progress_mu_);
+    progress_->Update(s, with_ref ? &rms : nullptr, with_ref ? &rel : nullptr);
+  }
   if (opts_.verbosity >= 2) {
     std::fprintf(stderr, "radiosity: %8.2f s %7ld shots  unshot %.3e", s.seconds, s.shots, s.unshot);
     if (with_ref) std::fprintf(stderr, "  rms %.3e (%.3f%%)", rms, 100 * rel);
@@ -463,6 +466,7 @@ void MasterRun::OnSample(const Sample& s) {
 // Workers joining, lost or skipped: above the progress line; -q keeps only
 // the warnings.
 void MasterRun::Note(const std::string& line, bool warning) {
+  std::lock_guard<std::mutex> lock(progress_mu_);
   if (opts_.verbosity == 1) progress_->Note(Printable(line));
   else if (warning || opts_.verbosity >= 2) Say(line);
 }

@@ -9,6 +9,7 @@
 #include <future>
 #include <list>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <utility>
@@ -120,6 +121,9 @@ class MasterRun {
   LogCsv log_;
   std::unique_ptr<Solver> solver_;
   std::unique_ptr<Progress> progress_;
+  // Notes come from the pool thread too (workers that sources bring:
+  // ssh hosts, connect-back), while this thread draws the progress line.
+  std::mutex progress_mu_;
   std::unique_ptr<Subdivider> subdivider_;
   long built_ = 0;  // elements as built, before dividing
   std::unique_ptr<Transport> transport_;

@@ -156,6 +156,7 @@ std::unique_ptr<Conn> SocketConn(int fd) {
 WorkerPool::WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh,
                        const PoolOptions& opts, Clock* clock)
     : mesh_(mesh), base_elements_(mesh.elems.size()), mesh_hash_(MeshHash(mesh)),
+      elements_(mesh.elems.size()), patches_(mesh.patches.size()),
       opts_(opts), clock_(clock), epoch_(clock->Now()) {
   epoll_ = ::epoll_create1(EPOLL_CLOEXEC);
   CHECK(epoll_ >= 0);  // only out of memory or descriptors: nothing to run on
@@ -275,6 +276,12 @@ void WorkerPool::Assign(int w, const proto::Assignment& a) {
 }
 
 void WorkerPool::Divide(const std::vector<int32_t>& elems) {
+  DivideTo(elems, mesh_.elems.size(), mesh_.patches.size());
+}
+
+void WorkerPool::DivideTo(const std::vector<int32_t>& elems, size_t elements, size_t patches) {
+  elements_ = elements;
+  patches_ = patches;
   edits_.insert(edits_.end(), elems.begin(), elems.end());
   for (Worker& w : workers_)
     if (w.state != State::kLost) proto::EncodeDivide(elems, &w.out);
@@ -372,8 +379,8 @@ bool WorkerPool::Handle(int w, proto::Msg type, std::string_view payload,
       // master's arrays, so they are checked here (ids increase: the last
       // is the largest).
       const proto::Column& c = ev.column;
-      if (c.patch < 0 || size_t(c.patch) >= mesh_.patches.size() ||
-          (!c.ff.empty() && size_t(c.ff.back().elem) >= mesh_.elems.size())) {
+      if (c.patch < 0 || size_t(c.patch) >= patches_ ||
+          (!c.ff.empty() && size_t(c.ff.back().elem) >= elements_)) {
         *why = "sent a column out of the mesh's range";
         return false;
       }

@@ -116,6 +116,11 @@ class WorkerPool : public Transport {
   std::string Name(int w) const override { return workers_[w].name; }
   void Assign(int w, const proto::Assignment& a) override;
   void Divide(const std::vector<int32_t>& elems) override;
+  // Divide, with the mesh's element and patch counts after it, which the
+  // columns' ids are checked against from then on: Divide reads them
+  // from the mesh; a pool on a thread of its own (ThreadedPool) is given
+  // them, read on the thread that divides the mesh.
+  void DivideTo(const std::vector<int32_t>& elems, size_t elements, size_t patches);
   void Poll(double timeout, std::vector<WorkerEvent>* events) override;
   void Send(std::vector<WorkerEvent>* events) override;
   // The run's clock: 0 until the first worker joins, so that waiting for
@@ -169,6 +174,7 @@ class WorkerPool : public Transport {
   const Mesh& mesh_;
   std::string scene_frame_;  // encoded once, sent to every worker
   uint64_t base_elements_, mesh_hash_;  // of the mesh as BuildMesh made it
+  size_t elements_, patches_;           // of the mesh now (DivideTo)
   std::vector<int32_t> edits_;          // every Divide so far, in order
   PoolOptions opts_;
   Clock* clock_;

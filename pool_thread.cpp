@@ -39,7 +39,8 @@ constexpr double kSleep = 1.0;
 
 }  // namespace
 
-ThreadedPool::ThreadedPool(std::unique_ptr<WorkerPool> pool) : pool_(std::move(pool)) {
+ThreadedPool::ThreadedPool(std::unique_ptr<WorkerPool> pool, const Mesh& mesh)
+    : pool_(std::move(pool)), mesh_(mesh) {
   wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
   CHECK(wake_fd_ >= 0);  // only out of descriptors or memory
   pool_->AddSource(std::make_unique<WakeSource>(wake_fd_));
@@ -61,17 +62,16 @@ ThreadedPool::~ThreadedPool() {
 void ThreadedPool::Assign(int w, const proto::Assignment& a) { pending_.push_back({w, a, {}}); }
 
 void ThreadedPool::Divide(const std::vector<int32_t>& elems) {
-  pending_.push_back({-1, {}, elems});
+  pending_.push_back({-1, {}, elems, mesh_.elems.size(), mesh_.patches.size()});
 }
 
 void ThreadedPool::Hand() {
-  std::vector<std::vector<FormFactor>> storage = TakeSpares();
-  if (pending_.empty() && storage.empty()) return;
+  if (pending_.empty() && !HasSpares()) return;
   bool wake = false;
   {
     std::lock_guard<std::mutex> lock(mu_);
     for (Order& o : pending_) orders_.push_back(std::move(o));
-    for (std::vector<FormFactor>& ff : storage) storage_.push_back(std::move(ff));
+    TakeSpares(&storage_);
     wake = sleeping_ && !pending_.empty();
     if (wake) sleeping_ = false;  // one write wakes it
   }
@@ -126,7 +126,7 @@ void ThreadedPool::Loop() {
     }
     for (Order& o : orders) {
       if (o.worker >= 0) pool_->Assign(o.worker, o.a);
-      else pool_->Divide(o.elems);
+      else pool_->DivideTo(o.elems, o.elements, o.patches);
     }
     orders.clear();
     for (std::vector<FormFactor>& ff : storage) pool_->Recycle(std::move(ff));

@@ -15,7 +15,7 @@
 //
 // What this layer does not know: the protocol, the workers, deadlines (the
 // pool's). After the constructor only the pool thread touches the pool,
-// until Shutdown joins it.
+// until Shutdown joins it; the mesh, only this thread.
 #ifndef RADIOSITY_POOL_THREAD_H
 #define RADIOSITY_POOL_THREAD_H
 
@@ -31,8 +31,10 @@
 
 class ThreadedPool : public Transport {
  public:
-  // Starts the thread: workers and sources already added are its.
-  explicit ThreadedPool(std::unique_ptr<WorkerPool> pool);
+  // Starts the thread: workers and sources already added are its. `mesh`
+  // is the pool's, read here only (its counts at each Divide: the pool
+  // thread must not read a mesh this thread divides).
+  ThreadedPool(std::unique_ptr<WorkerPool> pool, const Mesh& mesh);
   ~ThreadedPool() override;
 
   // As the pool said them with the last events Poll returned.
@@ -59,6 +61,7 @@ class ThreadedPool : public Transport {
     int worker;  // -1: a Divide
     proto::Assignment a;
     std::vector<int32_t> elems;
+    size_t elements = 0, patches = 0;  // the mesh's after the Divide
   };
   // What the pool said, copied with its events.
   struct Said {
@@ -71,6 +74,7 @@ class ThreadedPool : public Transport {
   void Publish(std::vector<WorkerEvent>* got);  // on the pool thread
 
   std::unique_ptr<WorkerPool> pool_;
+  const Mesh& mesh_;
   int wake_fd_ = -1;  // eventfd, in the pool's epoll set (a WorkerSource)
   std::vector<Order> pending_;  // this thread's, not yet handed over
   Said seen_;                   // this thread's copy

@@ -73,12 +73,13 @@ class Transport {
     spare_.pop_back();
     return ff;
   }
-  // Every list handed back so far (to pass on to a transport inside).
-  std::vector<std::vector<FormFactor>> TakeSpares() {
-    std::vector<std::vector<FormFactor>> all;
-    all.swap(spare_);
-    return all;
+  // Every list handed back so far, moved to the end of *into (to pass on
+  // to a transport inside); both keep their capacity.
+  void TakeSpares(std::vector<std::vector<FormFactor>>* into) {
+    for (std::vector<FormFactor>& ff : spare_) into->push_back(std::move(ff));
+    spare_.clear();
   }
+  bool HasSpares() const { return !spare_.empty(); }
 
  private:
   // Columns decoded in one Poll before any is shot each take one; more

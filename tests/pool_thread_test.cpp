@@ -44,7 +44,7 @@ class ThreadedPoolTest : public ::testing::Test {
       pool->Add(SocketConn(sv[0]), "worker " + std::to_string(i));
       peers.emplace_back(sv[1]);
     }
-    pool_ = std::make_unique<ThreadedPool>(std::move(pool));
+    pool_ = std::make_unique<ThreadedPool>(std::move(pool), mesh_);
     return peers;
   }
   // Reads the hello and scene, answers hello and ready.
@@ -164,6 +164,31 @@ TEST_F(ThreadedPoolTest, AWorkerThatClosesIsLost) {
   EXPECT_NE(ev[0].why.find("closed the connection"), std::string::npos) << ev[0].why;
 }
 
+// Columns' ids are checked against the mesh as this thread divided it,
+// the counts going with the Divide (the pool thread never reads the mesh
+// this thread changes): an id of a child is refused before, taken after.
+TEST_F(ThreadedPoolTest, ColumnsAreCheckedAgainstTheMeshOfTheLastDivide) {
+  std::vector<Peer> peers = Start(2);
+  for (Peer& p : peers) Join(&p);
+  Next(2);
+  const int32_t child = int32_t(mesh_.elems.size());  // Divide's first child
+  SendColumn(&peers[0], 1, {{child, 0.5f}});
+  std::vector<WorkerEvent> ev = Next();
+  ASSERT_EQ(ev[0].kind, WorkerEvent::kLost);
+  EXPECT_EQ(ev[0].worker, 0);
+  EXPECT_NE(ev[0].why.find("out of the mesh's range"), std::string::npos) << ev[0].why;
+  Divide(&mesh_, 0);
+  ASSERT_GT(mesh_.elems.size(), size_t(child));
+  pool_->Divide({0});
+  pool_->Send(&ev);
+  Msg type;
+  ASSERT_TRUE(peers[1].Next(&type));  // the pool thread has taken the Divide
+  EXPECT_EQ(type, Msg::kDivide);
+  SendColumn(&peers[1], 1, {{child, 0.5f}});
+  ev = Next();
+  EXPECT_EQ(ev[0].kind, WorkerEvent::kColumn) << ev[0].why;
+}
+
 // A real worker on a thread: its column is the one the master would
 // compute, and bye ends it with status 0.
 TEST_F(ThreadedPoolTest, ARealWorkerComputesTheColumn) {
@@ -174,7 +199,7 @@ TEST_F(ThreadedPoolTest, ARealWorkerComputesTheColumn) {
   std::thread worker([&] { status = RunWorker(sv[1], sv[1], &err); });
   auto pool = std::make_unique<WorkerPool>(setup_, mesh_, PoolOptions());
   pool->Add(SocketConn(sv[0]), "thread");
-  pool_ = std::make_unique<ThreadedPool>(std::move(pool));
+  pool_ = std::make_unique<ThreadedPool>(std::move(pool), mesh_);
   std::vector<WorkerEvent> ev = Next();
   ASSERT_EQ(ev[0].kind, WorkerEvent::kJoined) << ev[0].why;
   pool_->Assign(0, {2, 1});
