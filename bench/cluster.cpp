@@ -1,6 +1,6 @@
 // radiosity-cluster: the cluster simulation (sim.h) on any scene, as table
 // rows on stdout (bench/master.sh adds the headers).
-//   radiosity-cluster [--master-us US] SCENE.obj SHOTS [R] [WORKERS...]
+//   radiosity-cluster [--one-thread] [--master-us US] SCENE.obj SHOTS [R] [WORKERS...]
 // The real scheduler and solver drive simulated workers (every column
 // computed for real, the master charged its own measured CPU time, its
 // wake-ups and its system calls) on a
@@ -10,6 +10,8 @@
 // master's charged time per shot, and the most speedup the master's time
 // allows (paper graph 2: a worker's time per column / the master's per
 // shot). Without subdivision, so that every run shoots the same mesh.
+// --one-thread: the master reads and writes on its own thread, as before
+// pool_thread.h (SimOptions::pool_thread false), to compare.
 // --master-us US: the master is charged US microseconds a turn of its loop
 // instead of its measured time (its system calls and wake-ups still as
 // measured): a what-if for a master whose caches are its own. Measured in
@@ -17,8 +19,9 @@
 // its caches between turns, which a cluster's master does not: about 1.4
 // times its cost on the room and 1.7 at 10^5 elements (radiosity-master
 // --stir, README "The simulation held to the real runs").
-// Built against the program of before issue 14 as well (bench/master.sh):
-// it uses only RunMaster, Solver and SimTransport.
+// It uses only RunMaster, Solver and SimTransport, and SimOptions::pool_thread
+// (--one-thread): a build of an older program (bench/master.sh's
+// CLUSTER_BEFORE) is this file without that line.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -36,6 +39,11 @@
 int main(int argc, char** argv) {
   double master_us = -1;
   bool ok = true;
+  const bool one_thread = argc > 1 && std::strcmp(argv[1], "--one-thread") == 0;
+  if (one_thread) {
+    ++argv;
+    --argc;
+  }
   if (argc > 2 && std::strcmp(argv[1], "--master-us") == 0) {
     char* end;
     master_us = std::strtod(argv[2], &end);
@@ -44,7 +52,7 @@ int main(int argc, char** argv) {
     argc -= 2;
   }
   if (argc < 3 || !ok) {
-    std::fprintf(stderr, "usage: radiosity-cluster [--master-us US] SCENE.obj SHOTS [R] [WORKERS...]\n");
+    std::fprintf(stderr, "usage: radiosity-cluster [--one-thread] [--master-us US] SCENE.obj SHOTS [R] [WORKERS...]\n");
     return 2;
   }
   const long shots = std::atol(argv[2]);
@@ -72,6 +80,7 @@ int main(int argc, char** argv) {
       so.resolution = res;
       so.wakeup_s = wake;
       so.io = io;
+      so.pool_thread = !one_thread;
       if (master_us >= 0) so.master_cost_s = master_us * 1e-6;
       SimTransport t(mesh, so);
       Solver solver(mesh, true);
