@@ -400,6 +400,10 @@ void MasterRun::StartWorkers() {
     std::fprintf(stderr, "radiosity: listening for workers on %s\n", bound.c_str());
     pool->AddSource(std::move(listener));
   }
+  if (!UsePoolThread(opts_.pool_thread, long(local.size()), sysconf(_SC_NPROCESSORS_ONLN))) {
+    transport_ = std::move(pool);
+    return;
+  }
   auto threaded = std::make_unique<ThreadedPool>(std::move(pool), mesh_);
   pool_thread_ = threaded.get();
   transport_ = std::move(threaded);

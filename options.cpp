@@ -94,6 +94,9 @@ const char kUsage[] =
     "      --timeout SEC      drop a worker silent, or given work and sending no\n"
     "                         column, this long (default 10)\n"
     "      --worker-cmd CMD   start local workers with CMD --worker\n"
+    "      --pool-thread      talk to the workers on a thread of its own (default:\n"
+    "                         when the local workers leave a core free for it)\n"
+    "      --no-pool-thread   talk to them on the master's thread\n"
     "  -H, --hosts FILE       also start workers on the hosts in FILE (ssh);\n"
     "                         -j then defaults to 0\n"
     "      --dump-hosts       print the hosts of -H FILE as parsed, and exit\n"
@@ -154,7 +157,7 @@ const char kUsage[] =
 Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   enum {
     kNoOvershoot = 256, kReference, kPatchSize, kElements, kNoRotate, kSeed,
-    kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
+    kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd, kPoolThread, kNoPoolThread,
     kNoJoin, kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
     kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect, kConverge,
     kCheckpoint, kCheckpointEvery, kResume, kNoGroups, kGroupSize, kView, kSplit, kSplitFloor,
@@ -187,6 +190,8 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       {"no-groups", no_argument, nullptr, kNoGroups},
       {"group-size", required_argument, nullptr, kGroupSize},
       {"no-subdivide", no_argument, nullptr, kNoSubdivide},
+      {"pool-thread", no_argument, nullptr, kPoolThread},
+      {"no-pool-thread", no_argument, nullptr, kNoPoolThread},
       {"no-waves", no_argument, nullptr, kNoWaves},
       {"subdivide-floor", required_argument, nullptr, kFloor},
       {"split", no_argument, nullptr, kSplit},
@@ -216,6 +221,7 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   bool epsilon_given = false, worker_mode = false, workers_given = false, dump_hosts = false;
   // Given on the command line: options that contradict others.
   bool quiet = false, verbose = false, no_subdivide = false, no_waves = false;
+  bool pool_thread_on = false, pool_thread_off = false;
   bool wave_fraction = false;
   std::string subdivide_limit;  // the last of --subdivide-floor, --min-element, --max-level, --split-*
   std::string split_given;      // the last of --split-floor, --split-near
@@ -246,6 +252,8 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
       case kTimeout: ok = Number("--timeout", optarg, 0.5, 86400, &o.pool.timeout_s, err); break;
       case kWorker: worker_mode = true; break;
       case kWorkerCmd: o.worker_cmd = optarg; break;
+      case kPoolThread: o.pool_thread = 1; pool_thread_on = true; break;
+      case kNoPoolThread: o.pool_thread = 0; pool_thread_off = true; break;
       case 'H': o.hosts_file = optarg; break;
       case kDumpHosts: dump_hosts = true; break;
       case kAcceptNewHostKeys: o.ssh.accept_new_host_keys = true; break;
@@ -336,6 +344,8 @@ Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   // Options that contradict each other: one of them would be ignored.
   std::string clash;
   if (quiet && verbose) clash = "-q and -v contradict each other";
+  else if (pool_thread_on && pool_thread_off)
+    clash = "--pool-thread and --no-pool-thread contradict each other";
   else if (no_subdivide && !subdivide_limit.empty())
     clash = subdivide_limit + " limits dividing, and --no-subdivide divides nothing";
   else if (no_subdivide && split)

@@ -33,6 +33,10 @@ struct Options {
 
   long workers = 0;  // -j: online cores, 0 with -H or --listen
   std::string worker_cmd;
+  // --pool-thread / --no-pool-thread: the workers' I/O on a thread of its
+  // own or on the master's; unset (-1): when a core is free for it
+  // (UsePoolThread, pool_thread.h).
+  int pool_thread = -1;
   std::string hosts_file;
   std::vector<HostSpec> hosts;  // -H FILE, read
   PoolOptions pool;

@@ -164,3 +164,7 @@ void ThreadedPool::Shutdown() {
   }
   pool_->Shutdown();
 }
+
+bool UsePoolThread(int setting, long local, long cores) {
+  return setting >= 0 ? setting == 1 : cores >= local + 2;
+}

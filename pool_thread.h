@@ -91,4 +91,13 @@ class ThreadedPool : public Transport {
   std::thread thread_;
 };
 
+// Whether the pool gets a thread of its own: `setting` 1 yes, 0 no; -1
+// (the default) when the machine has a core for it beside the master's
+// thread and its `local` worker processes. With every core computing
+// columns a second master thread only takes CPU from them, and wakes
+// twice more a column (the pool thread, then the master's): -j 2 on this
+// project's two cores reached 0.92-0.94 of ideal with it against
+// 0.98-1.00 without (bench/defaults.sh, room and blender, side by side).
+bool UsePoolThread(int setting, long local, long cores);
+
 #endif

@@ -31,6 +31,10 @@ FEED="build/radiosity-feed --sleep"
 [ -n "$FEED_SPIN" ] && FEED=build/radiosity-feed
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
+# --pool-thread for a binary that has it: the feed stands for workers on
+# other machines, and -j 1 on two cores would otherwise keep the pool on
+# the master's thread (UsePoolThread).
+thread() { "$1" --help 2>&1 | grep -q -- --pool-thread && echo --pool-thread; }
 # BIN SCENE R FEED: the breakdown of the least master time of ROUNDS runs,
 # "distribute receive shoot columns worker_s pool_s" (seconds,
 # counts; pool_s "-" without a pool thread).
@@ -38,7 +42,7 @@ best() {
   i=0
   while [ $i -lt "$ROUNDS" ]; do
     if [ "$4" = feed ]; then
-      "$1" -v -j 1 --queue 30 --worker-cmd "$FEED" -r "$3" -s "$SHOTS" -e 1e-9 --no-subdivide \
+      "$1" -v -j 1 --queue 30 --worker-cmd "$FEED" -r "$3" -s "$SHOTS" -e 1e-9 --no-subdivide $(thread "$1") \
         -o "$out/run" "scenes/$2.obj" 2>"$out/err" >/dev/null
     else
       "$1" -v -j 1 -r "$3" -s 500 --no-subdivide -o "$out/run" "scenes/$2.obj" 2>"$out/err" >/dev/null

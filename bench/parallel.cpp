@@ -45,6 +45,7 @@
 #include "hemicube.h"
 #include "mesh.h"
 #include "pool.h"
+#include "pool_thread.h"
 #include "protocol.h"
 #include "results.h"
 #include "scene.h"
@@ -141,19 +142,28 @@ proto::SceneSetup Setup(const SceneData& s, const RunOptions& o) {
 
 // The master in this process and `workers` worker processes of `exe`, as
 // `radiosity -j N` runs them.
-Trace RealRun(const SceneData& s, int res, int workers, long shots, const std::string& exe) {
+// The pool as the program would have it on a machine of `cores` with
+// these local workers: on a thread of its own when a core is free for it.
+Trace RealRun(const SceneData& s, int res, int workers, long shots, const std::string& exe,
+              int cores) {
   const RunOptions o = Options(res, shots);
-  WorkerPool pool(Setup(s, o), s.mesh, PoolOptions());
+  auto pool = std::make_unique<WorkerPool>(Setup(s, o), s.mesh, PoolOptions());
   for (int i = 0; i < workers; ++i) {
     pid_t pid = 0;
     std::string err;
     std::unique_ptr<Conn> conn = SpawnLocal({exe, "--worker"}, &pid, &err);
     if (!conn) Die(exe + ": " + err);
-    pool.Add(std::move(conn), "worker " + std::to_string(i) + " (pid " + std::to_string(pid) + ")");
+    pool->Add(std::move(conn), "worker " + std::to_string(i) + " (pid " + std::to_string(pid) + ")");
   }
-  Trace t = Record(s, o, &pool);
-  pool.Shutdown();
-  return t;
+  if (UsePoolThread(-1, workers, cores)) {
+    ThreadedPool threaded(std::move(pool), s.mesh);
+    Trace trace = Record(s, o, &threaded);
+    threaded.Shutdown();
+    return trace;
+  }
+  Trace trace = Record(s, o, pool.get());
+  pool->Shutdown();
+  return trace;
 }
 
 Trace SimRun(const SceneData& s, int res, SimOptions so, long shots) {
@@ -309,7 +319,7 @@ std::vector<MasterRow> MasterTimes(const Config& c, const std::vector<SceneData>
       MasterRow best{};
       double worker = HUGE_VAL;
       for (int i = 0; i < c.repeat; ++i) {
-        const Trace t = RealRun(s, res, 1, kShots, c.exe);
+        const Trace t = RealRun(s, res, 1, kShots, c.exe, c.cores);
         const RunResult& r = t.r;
         MasterRow row{s.name, res, r.distribute_s, r.receive_s, r.shoot_s, r.subdivide_s,
                       r.worker_s / double(r.columns),
@@ -575,9 +585,12 @@ std::vector<Point> Speedups(const Config& c, const std::vector<SceneData>& scene
           Point one{};
           for (int n : net.real ? c.RealCounts() : counts) {
             auto run = [&](long cap) {
-              if (real) return RealRun(s, res, n, cap, c.exe);
+              if (real) return RealRun(s, res, n, cap, c.exe, c.cores);
               SimOptions o = net.model;
               o.workers = n;
+              // On this machine as the program would run (RealRun); a
+              // cluster's master has its cores to itself.
+              o.pool_thread = o.host_cores == 0 || UsePoolThread(-1, n, o.host_cores);
               return SimRun(s, res, o, cap);
             };
             Point p = Measure(s.name, net.name, res, n, real, net.real ? c.repeat : 1, target,

@@ -159,6 +159,12 @@ TEST(Options, LongFormsOfShortOptions) {
   EXPECT_EQ(Parses({"s.obj", "-j", "0"}).scene_path, "s.obj");
 }
 
+TEST(Options, PoolThreadIsAutomaticUnlessSaid) {
+  EXPECT_EQ(Parses({"s.obj"}).pool_thread, -1);
+  EXPECT_EQ(Parses({"--pool-thread", "s.obj"}).pool_thread, 1);
+  EXPECT_EQ(Parses({"--no-pool-thread", "s.obj"}).pool_thread, 0);
+}
+
 TEST(Options, HelpAndVersion) {
   Options o;
   std::string err;
@@ -418,6 +424,8 @@ TEST(Options, EmptyNamesAreRefused) {
 
 TEST(Options, ContradictionsAreRefused) {
   EXPECT_EQ(Error({"-q", "-v", "s.obj"}), "-q and -v contradict each other (try 'radiosity --help')");
+  EXPECT_EQ(Error({"--pool-thread", "--no-pool-thread", "s.obj"}),
+            "--pool-thread and --no-pool-thread contradict each other (try 'radiosity --help')");
   EXPECT_EQ(Error({"--no-subdivide", "--max-level", "3", "s.obj"}),
             "--max-level limits dividing, and --no-subdivide divides nothing (try 'radiosity --help')");
   EXPECT_EQ(Error({"--min-element", "0.1", "--no-subdivide", "s.obj"}),

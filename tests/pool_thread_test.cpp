@@ -259,4 +259,14 @@ TEST_F(ThreadedPoolTest, SignalsGoToTheMastersThread) {
   ::sigaction(SIGUSR1, &old, nullptr);
 }
 
+TEST(UsePoolThread, WhenACoreIsFreeForItUnlessSaid) {
+  EXPECT_TRUE(UsePoolThread(-1, 0, 2));   // remote workers only
+  EXPECT_FALSE(UsePoolThread(-1, 1, 2));  // -j 1 on two cores
+  EXPECT_FALSE(UsePoolThread(-1, 2, 2));
+  EXPECT_TRUE(UsePoolThread(-1, 2, 4));
+  EXPECT_FALSE(UsePoolThread(-1, 0, 1));
+  EXPECT_TRUE(UsePoolThread(1, 2, 2));
+  EXPECT_FALSE(UsePoolThread(0, 0, 64));
+}
+
 }  // namespace
