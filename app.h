@@ -43,6 +43,8 @@ ExitStatus DumpHosts(const Options& opts);
 // --connect HOST:PORT.
 ExitStatus WorkerMain(const Options& opts);
 
+class ThreadedPool;
+
 // Files written on threads of their own while the master goes on: a
 // wave's picture took 65-80 ms on the room, 45-60 of them encoding the
 // PNG, time in which the master's loop fed no worker (bench/defaults.sh).
@@ -127,7 +129,7 @@ class MasterRun {
   std::unique_ptr<Subdivider> subdivider_;
   long built_ = 0;  // elements as built, before dividing
   std::unique_ptr<Transport> transport_;
-  class ThreadedPool* pool_thread_ = nullptr;  // transport_, when workers are processes
+  ThreadedPool* pool_thread_ = nullptr;  // transport_, when the pool has its thread
   long sub_limit_ = 0;  // elements subdivision may reach: kMaxElements, or what memory allows
   RunResult result_;
   std::unique_ptr<ViewServer> view_;  // --view
