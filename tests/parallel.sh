@@ -31,10 +31,21 @@ MAZE=$SCENES/maze.obj
 ARGS=(-e 1e-5 -r 128)
 
 run_ok_shared "maze, sequential" "$T/seq" -j 0 "${ARGS[@]}" "$MAZE" || finish
-run_ok "maze, -j 2" "$T/j2" -j 2 "${ARGS[@]}" "$MAZE" &&
+run_ok "maze, -j 2" "$T/j2" -j 2 -v "${ARGS[@]}" "$MAZE" &&
   check_same "maze: -j 2 agrees with -j 0" "$T/j2/result.csv" "$T/seq/result.csv" 0.5
-run_ok "maze, -j 4 --pool-thread" "$T/j4" -j 4 --pool-thread "${ARGS[@]}" "$MAZE" &&
+run_ok "maze, -j 4 --pool-thread" "$T/j4" -j 4 -v --pool-thread "${ARGS[@]}" "$MAZE" &&
   check_same "maze: -j 4 --pool-thread agrees with -j 0" "$T/j4/result.csv" "$T/seq/result.csv" 0.5
+# -v names the pool thread where there is one: by default only when the
+# cores leave one free beside the two local workers (UsePoolThread).
+want=no; [ "$(getconf _NPROCESSORS_ONLN)" -ge 4 ] && want=yes
+got=no; grep -q "^radiosity: pool thread: " "$T/j2.err" && got=yes
+[ "$got" = "$want" ] && pass "-j 2 on $(getconf _NPROCESSORS_ONLN) cores: pool thread $got" ||
+  fail "-j 2 on $(getconf _NPROCESSORS_ONLN) cores: pool thread (got $got, want $want)"
+if grep -q "^radiosity: pool thread: [0-9.]* s CPU" "$T/j4.err"; then
+  pass "-j 4 --pool-thread: $(grep "^radiosity: pool thread" "$T/j4.err")"
+else
+  fail "-j 4 --pool-thread: no pool thread line in -v"
+fi
 
 # Shooter groups (groups.h) on the workers as on the master: a unit box
 # lit from its ceiling, the floor cut into 12 x 12 tiles that group.
