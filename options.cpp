@@ -157,7 +157,8 @@ const char kUsage[] =
 Parsed ParseOptions(int argc, char** argv, Options* opts, std::string* err) {
   enum {
     kNoOvershoot = 256, kReference, kPatchSize, kElements, kNoRotate, kSeed,
-    kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd, kPoolThread, kNoPoolThread,
+    kLogEvery, kCamera, kSize, kFormat, kVersion, kQueue, kTimeout, kWorker, kWorkerCmd,
+    kPoolThread, kNoPoolThread,
     kNoJoin, kNoSubdivide, kNoWaves, kFloor, kMinElement, kMaxLevel, kWaveFraction,
     kDumpHosts, kAcceptNewHostKeys, kListen, kSecret, kConnect, kConverge,
     kCheckpoint, kCheckpointEvery, kResume, kNoGroups, kGroupSize, kView, kSplit, kSplitFloor,

@@ -96,8 +96,9 @@ class ThreadedPool : public Transport {
 // thread and its `local` worker processes. With every core computing
 // columns a second master thread only takes CPU from them, and wakes
 // twice more a column (the pool thread, then the master's): -j 2 on this
-// project's two cores reached 0.92-0.94 of ideal with it against
-// 0.98-1.00 without (bench/defaults.sh, room and blender, side by side).
+// project's two cores reached 0.92-0.96 of ideal with it against
+// 0.93-1.00 without, lower in 4 of 5 pairs (bench/defaults.sh, room twice,
+// blender, maze, side by side).
 bool UsePoolThread(int setting, long local, long cores);
 
 #endif
