@@ -1,7 +1,9 @@
 #include "sim.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <string>
 
 #include <poll.h>
 #include <sys/epoll.h>
@@ -69,16 +71,20 @@ void SimTransport::Assign(int w, const proto::Assignment& a) {
   Event ev{Event::kSend, w, frame.size(), Event::kWork};
   ev.a = a;
   const double t = Now();
+  Worker& wk = workers_[size_t(w)];
+  // The first work on its way to an idle worker wakes it.
+  const double wake = !wk.busy && wk.todo.empty() && wk.sent == 0 ? opts_.io.wake_s : 0;
+  ++wk.sent;
   if (opts_.pool_thread) {
     // Handed over (an eventfd write when the pool thread sleeps), then
     // written by it.
     if (!handed_ && pool_free_ <= t) io_owed_ += opts_.io.write_s;
     handed_ = true;
-    Schedule(PoolWork(t, opts_.io.write_s), ev);
+    Schedule(PoolWork(t, opts_.io.write_s + wake), ev);
     return;
   }
   Schedule(t, ev);
-  Worker& wk = workers_[size_t(w)];
+  io_owed_ += wake;
   unsent_ += wk.given != turn_;
   wk.given = turn_;
 }
@@ -153,7 +159,7 @@ double SimTransport::Speed(int w) const {
 
 // A worker takes its next assignment: the column is computed now, for
 // real, and what that cost is the work the worker has to get through.
-void SimTransport::Start(int w) {
+void SimTransport::Start(int w, double extra) {
   Worker& wk = workers_[w];
   if (wk.crashed || wk.busy || wk.todo.empty()) return;
   const proto::Assignment a = wk.todo.front().first;
@@ -167,7 +173,7 @@ void SimTransport::Start(int w) {
   scratch_.compute_s = (fixed ? opts_.column_cost_s : ThreadCpuSeconds() - t0) * wk.factor;
   wk.frame.clear();
   proto::EncodeColumn(scratch_, &wk.frame);
-  wk.left = fixed ? opts_.column_cost_s : ThreadCpuSeconds() - t0;
+  wk.left = (fixed ? opts_.column_cost_s : ThreadCpuSeconds() - t0) + extra;
   wk.busy = true;
 }
 
@@ -192,7 +198,11 @@ void SimTransport::Finish(int w) {
   Event ev{Event::kColumn, w, wk.frame.size()};
   ev.frame = std::move(wk.frame);
   Upload(w, std::move(ev));
-  Start(w);
+  Start(w, opts_.io.column_s + (ReaderAsleep() ? opts_.io.wake_s : 0));
+}
+
+bool SimTransport::ReaderAsleep() const {
+  return opts_.pool_thread ? pool_free_ <= now_ : asleep_;
 }
 
 void SimTransport::Process(Event& ev) {
@@ -216,10 +226,13 @@ void SimTransport::Process(Event& ev) {
       Schedule(wk.last_arrival, std::move(arrival));
       return;
     }
-    case Event::kWork:
+    case Event::kWork: {
+      --wk.sent;
+      const bool idle = !wk.busy && wk.todo.empty();  // asleep in poll: woken
       wk.todo.emplace_back(ev.a, now_);
-      Start(ev.worker);
+      Start(ev.worker, idle ? opts_.wakeup_s : 0);
       return;
+    }
     case Event::kScene:
       Schedule(now_ + opts_.startup_s, {Event::kReady, ev.worker});
       return;
@@ -328,7 +341,9 @@ void SimTransport::Poll(double timeout, std::vector<WorkerEvent>* events) {
   Charge();
   if (inbox_.empty()) {
     const double slept_from = now_;
+    asleep_ = true;
     Advance(nullptr, now_ + timeout, true);
+    asleep_ = false;
     if (opts_.wakeup_s > 0 && now_ > slept_from && !inbox_.empty()) {
       double wake = opts_.wakeup_s;
       master_s_ += wake;
@@ -418,6 +433,59 @@ double MeasureWakeup() {
   return std::isfinite(woken) && std::isfinite(ready) ? std::max(0.0, woken - ready) : 0;
 }
 
+namespace {
+
+// What writing `frame` costs more when its reader, another process, sleeps
+// in epoll_wait than when it does not (thread CPU seconds, the least of 3
+// rounds; 0 if it cannot be measured): 300 us between writes lets it fall
+// asleep each time, back to back it has no time to.
+double WakingWrite(const std::string& frame) {
+  int sv[2];
+  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0) return 0;
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(sv[1]);
+    const int ep = ::epoll_create1(EPOLL_CLOEXEC);
+    epoll_event ev{};
+    ev.events = EPOLLIN;
+    if (ep < 0 || ::epoll_ctl(ep, EPOLL_CTL_ADD, sv[0], &ev) != 0) ::_exit(1);
+    char buf[65536];
+    for (;;) {
+      epoll_event got;
+      if (::epoll_wait(ep, &got, 1, -1) < 0 && errno != EINTR) ::_exit(1);
+      if (::read(sv[0], buf, sizeof buf) <= 0) ::_exit(0);
+    }
+  }
+  ::close(sv[0]);
+  constexpr int kRounds = 3, kWrites = 100;
+  double woken = HUGE_VAL, awake = HUGE_VAL;
+  bool ok = pid > 0;
+  for (int r = 0; r < kRounds && ok; ++r) {
+    double cpu = 0;
+    for (int i = 0; i < kWrites && ok; ++i) {
+      const double until = MonotonicSeconds() + 300e-6;
+      while (MonotonicSeconds() < until) {
+      }
+      const double c0 = ThreadCpuSeconds();
+      ok &= ::write(sv[1], frame.data(), frame.size()) == ssize_t(frame.size());
+      cpu += ThreadCpuSeconds() - c0;
+    }
+    woken = std::min(woken, cpu / kWrites);
+    cpu = 0;  // timed alike, so that the clock's own cost cancels
+    for (int i = 0; i < kWrites && ok; ++i) {
+      const double c0 = ThreadCpuSeconds();
+      ok &= ::write(sv[1], frame.data(), frame.size()) == ssize_t(frame.size());
+      cpu += ThreadCpuSeconds() - c0;
+    }
+    awake = std::min(awake, cpu / kWrites);
+  }
+  ::close(sv[1]);
+  if (pid > 0) ::waitpid(pid, nullptr, 0);
+  return ok ? std::max(0.0, woken - awake) : 0;
+}
+
+}  // namespace
+
 SimOptions::Io MeasureIo() {
   SimOptions::Io io;
   int sv[2];
@@ -434,7 +502,7 @@ SimOptions::Io MeasureIo() {
   constexpr int kRounds = 3, kCalls = 40;
   const std::string frame(2048, 'c'), work(24, 'w');
   std::string buf(frame.size(), '\0');
-  io.epoll_s = io.read_s = io.write_s = HUGE_VAL;
+  io.epoll_s = io.read_s = io.write_s = io.column_s = HUGE_VAL;
   bool ok = true;
   for (int r = 0; r < kRounds && ok; ++r) {
     double c0 = ThreadCpuSeconds();
@@ -453,9 +521,27 @@ SimOptions::Io MeasureIo() {
     c0 = ThreadCpuSeconds();
     for (int i = 0; i < kCalls; ++i) ok &= ::read(sv[0], &buf[0], buf.size()) == ssize_t(buf.size());
     io.read_s = std::min(io.read_s, (ThreadCpuSeconds() - c0) / kCalls);
+    // A worker's turn: the poll after its column finding nothing, an
+    // assignment read, its column written, its CPU clock read twice.
+    for (int i = 0; i < kCalls; ++i) ok &= ::write(sv[0], work.data(), work.size()) == ssize_t(work.size());
+    c0 = ThreadCpuSeconds();
+    for (int i = 0; i < kCalls; ++i) {
+      pollfd p{sv[1], POLLIN, 0};
+      ok &= ::poll(&p, 1, 0) == 1 && ::read(sv[1], &buf[0], work.size()) == ssize_t(work.size());
+      ok &= ::write(sv[1], frame.data(), frame.size()) == ssize_t(frame.size());
+      ok &= ThreadCpuSeconds() >= 0 && ThreadCpuSeconds() >= 0;
+    }
+    io.column_s = std::min(io.column_s, (ThreadCpuSeconds() - c0) / kCalls);
+    for (size_t left = frame.size() * kCalls; ok && left > 0;) {  // drained, untimed
+      const ssize_t n = ::read(sv[0], &buf[0], std::min(left, buf.size()));
+      ok &= n > 0;
+      left -= size_t(std::max<ssize_t>(n, 0));
+    }
   }
   ::close(ep);
   ::close(sv[0]);
   ::close(sv[1]);
-  return ok ? io : SimOptions::Io();
+  if (!ok) return SimOptions::Io();
+  io.wake_s = WakingWrite(frame);
+  return io;
 }

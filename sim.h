@@ -110,8 +110,18 @@ struct SimOptions {
   // simulated one does not (MeasureIo() on this machine, or 0): an
   // epoll_wait per Poll, a read per worker heard in it (all its frames in
   // one read), a write per worker given work since the last Poll or Send.
+  // And those of a real worker, which a simulated one, computing in this
+  // process, does not make: column_s per column (a write of its frame, a
+  // poll finding nothing new, its CPU clock read twice), and wake_s more
+  // for a write whose reader sleeps in epoll_wait or poll (the kernel
+  // wakes it on the writer's time: an interrupt to another core, dear in
+  // a virtual machine). A worker pays it for a column that finds the
+  // master (or its pool thread) asleep, the master for work sent to an
+  // idle worker; an idle worker woken by work pays wakeup_s, as the
+  // master does.
   struct Io {
     double epoll_s = 0, read_s = 0, write_s = 0;
+    double column_s = 0, wake_s = 0;
   } io;
   // The master's I/O on a thread of its own, as the program does it
   // (pool_thread.h); false: on the master's, as before it.
@@ -128,10 +138,12 @@ struct SimOptions {
 // seconds per wake-up (the least of 3 rounds of 200).
 double MeasureWakeup();
 
-// This machine's CPU cost of the master's system calls (SimOptions::Io):
-// epoll_wait finding a socket ready, a read of a 2 KB frame (a column's
-// size on the shipped scenes), a write of an assignment, on a socketpair;
-// thread CPU seconds each, the least of 3 rounds.
+// This machine's CPU cost of the system calls a real run makes and the
+// simulation does not (SimOptions::Io): epoll_wait finding a socket ready,
+// a read of a 2 KB frame (a column's size on the shipped scenes), a write
+// of an assignment, on a socketpair; a worker's per column; and what a
+// write costs more when it wakes another process sleeping in epoll_wait.
+// Thread CPU seconds each, the least of 3 rounds.
 SimOptions::Io MeasureIo();
 
 class SimTransport : public Transport {
@@ -187,6 +199,7 @@ class SimTransport : public Transport {
     double link_free = 0;     // when its own link is next idle
     long columns = 0;
     long given = -1;          // the last turn (turn_) it was given work in
+    int sent = 0;             // assignments on their way to it
     long heard = -1;          // the last turn whose Poll read it
   };
 
@@ -208,8 +221,13 @@ class SimTransport : public Transport {
   double PoolWork(double at, double cpu);
   // A column's frame decoded as the master would, into a recycled list.
   proto::Column Decode(const Event& ev);
-  void Start(int w);
+  // Worker w starts its next column, if it has one, after `extra` CPU
+  // seconds of system calls.
+  void Start(int w, double extra = 0);
   void Finish(int w);
+  // Whether the reader of a column sent now (the master or its pool
+  // thread) sleeps in epoll_wait.
+  bool ReaderAsleep() const;
 
   const Mesh& mesh_;
   SimOptions opts_;
@@ -236,6 +254,7 @@ class SimTransport : public Transport {
   double pool_free_ = 0;  // when the pool thread is next idle (pool_thread)
   double pool_s_ = 0;
   bool handed_ = false;   // orders handed to the pool thread this turn
+  bool asleep_ = false;   // the master waits in Poll for an arrival
 };
 
 #endif

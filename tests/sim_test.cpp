@@ -287,6 +287,32 @@ TEST(Sim, WithAPoolThreadTheSystemCallsAreItsOwn) {
   EXPECT_LT(helped.master, 0.6 * alone.master);
 }
 
+// A real worker's system calls a column (Io::column_s), and what its
+// write costs more when the master, or the master's pool thread, sleeps
+// (Io::wake_s): one worker and a master that waits for each column, so
+// every column after the first pays both and the run takes that much
+// longer. Work sent to an idle worker costs its sender the wake-up too:
+// the 8 workers idle at the start at least.
+TEST(Sim, AWorkersSystemCallsAreCharged) {
+  Mesh m = BoxMesh();
+  const double c = 0.01 * kCost;
+  for (bool pool_thread : {false, true}) {
+    const Charged none = HundredShots(m, 1, 0, 0, {}, pool_thread);
+    const Charged column = HundredShots(m, 1, 0, 0, {0, 0, 0, c, 0}, pool_thread);
+    const Charged wake = HundredShots(m, 1, 0, 0, {0, 0, 0, 0, c}, pool_thread);
+    EXPECT_NEAR(column.seconds - none.seconds, 99 * c, 0.5 * c) << pool_thread;
+    // And the first work's, which wakes the worker: written on the pool
+    // thread before it leaves; on the master's, charged at its next turn
+    // (as every write there), after it has left.
+    EXPECT_NEAR(wake.seconds - none.seconds, (pool_thread ? 100 : 99) * c, 0.5 * c)
+        << pool_thread;
+  }
+  const Charged busy = HundredShots(m, 8, 0.5 * kCost, 0, {}, false);
+  const Charged woken = HundredShots(m, 8, 0.5 * kCost, 0, {0, 0, 0, 0, c}, false);
+  EXPECT_GE(woken.master - busy.master, 8 * c - 1e-12);
+  EXPECT_LE(woken.master - busy.master, double(busy.columns + 8) * c);
+}
+
 // A master slower than its workers stops feeding them: the columns it has
 // not shot count against their queues, so they do not pile up (which
 // would shoot patches in arrival order, not by power).
