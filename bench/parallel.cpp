@@ -1,6 +1,6 @@
 // radiosity-parallel: the paper's section 5 reproduced, as tables on
 // stdout, CSV and SVG graphs in OUT_DIR.
-//   radiosity-parallel [--repeat N] [--quick] [--cores N] RADIOSITY OUT_DIR
+//   radiosity-parallel [--repeat N] [--quick | --validation] [--cores N] RADIOSITY OUT_DIR
 // RADIOSITY is the program whose --worker mode the real runs start (as
 // `radiosity -j N` does). Scenes come from scenes/ and converged answers
 // are cached in bench/results/tmp/, so run it from the repository's top
@@ -16,7 +16,8 @@
 //    machine next to them (the validation), and the simulated cluster up
 //    to 128 workers on three networks (10 Gbit/s, 1 Gbit/s, 10 Mbit/s):
 //    the room and the maze; without --quick the other shipped scenes on
-//    this machine too, for the validation (--quick: the room alone).
+//    this machine too, for the validation (--quick: the room alone;
+//    --validation: this machine's rows of every shipped scene alone).
 // Times run from the first shot, so that start-up (process start, the
 // scene's transfer, mesh building, the first round trip) is left out alike
 // everywhere: the figures are those of a run under way. The simulated
@@ -281,6 +282,7 @@ struct Config {
   std::string exe, out;
   int repeat = 3;
   bool quick = false;
+  bool validation = false;  // this machine's rows alone: the validation
   int cores = 2;  // this machine's, shared by the master and the real workers
   // Real worker counts: 1, 2, 4, ... below cores, then cores.
   std::vector<int> RealCounts() const {
@@ -733,13 +735,14 @@ int main(int argc, char** argv) {
   int a = 1;
   for (; a < argc && argv[a][0] == '-'; ++a) {
     if (!std::strcmp(argv[a], "--quick")) c.quick = true;
+    else if (!std::strcmp(argv[a], "--validation")) c.validation = true;
     else if (!std::strcmp(argv[a], "--repeat") && a + 1 < argc) c.repeat = std::max(1, std::atoi(argv[++a]));
     else if (!std::strcmp(argv[a], "--cores") && a + 1 < argc) c.cores = std::clamp(std::atoi(argv[++a]), 1, 256);
     else break;
   }
   if (argc - a != 2) {
     std::fprintf(stderr,
-                 "usage: radiosity-parallel [--repeat N] [--quick] [--cores N] RADIOSITY OUT_DIR\n");
+                 "usage: radiosity-parallel [--repeat N] [--quick | --validation] [--cores N] RADIOSITY OUT_DIR\n");
     return 2;
   }
   c.exe = argv[a];
@@ -752,8 +755,10 @@ int main(int argc, char** argv) {
   const SceneData room = Load("room"), maze = Load("maze"), cornell = Load("cornell");
   Targets targets;
   const std::vector<MasterRow> master =
-      MasterTimes(c, {room, maze, cornell},
-                  c.quick ? std::vector<int>{64, 256} : std::vector<int>{64, 128, 256, 512});
+      c.validation ? std::vector<MasterRow>()
+                   : MasterTimes(c, {room, maze, cornell},
+                                 c.quick ? std::vector<int>{64, 256}
+                                         : std::vector<int>{64, 128, 256, 512});
   for (const MasterRow& r : master)
     if (r.scene == "room" && r.res == 256) {
       char buf[200];
@@ -776,14 +781,18 @@ int main(int argc, char** argv) {
               "simulations charge it): %.1f us\n",
               1e6 * wake);
   std::printf("System calls charged per Poll, per worker read, per worker written (epoll_wait, "
-              "read of 2 KB, write of 24 bytes): %.2f, %.2f, %.2f us\n\n",
-              1e6 * io.epoll_s, 1e6 * io.read_s, 1e6 * io.write_s);
-  const std::vector<Net> nets = {
+              "read of 2 KB, write of 24 bytes): %.2f, %.2f, %.2f us; a worker's per column "
+              "(poll, read, write of 2 KB, its CPU clock twice): %.2f us; a write more when it "
+              "wakes its reader: %.2f us\n\n",
+              1e6 * io.epoll_s, 1e6 * io.read_s, 1e6 * io.write_s, 1e6 * io.column_s,
+              1e6 * io.wake_s);
+  std::vector<Net> nets = {
       {"this machine", "local", Link(0, 20e-6, c.cores, wake, io), true},
       {"10 Gbit/s", "10gbit", Link(10e9, 20e-6, 0, wake, io), false},
       {"1 Gbit/s", "1gbit", Link(1e9, 50e-6, 0, wake, io), false},
       {"10 Mbit/s", "10mbit", Link(10e6, 200e-6, 0, wake, io), false},
   };
+  if (c.validation) nets.resize(1);
   const std::vector<int> counts = c.quick ? std::vector<int>{1, 2, 8, 15, 100}
                                           : std::vector<int>{1, 2, 4, 8, 15, 32, 64, 100, 128};
   std::vector<SceneData> validate;
@@ -792,6 +801,7 @@ int main(int argc, char** argv) {
   const std::vector<Point> pts =
       Speedups(c, c.quick ? std::vector<SceneData>{room} : std::vector<SceneData>{room, maze},
                validate, {64, 256}, nets, counts, &targets);
+  if (c.validation) return 0;
   HalfEfficiency(pts, nets);
   SpeedupTargets(pts, &targets);
   std::printf("Targets (issues 4 and 17)\n");
