@@ -8,6 +8,7 @@
 
 #include "check.h"
 #include "mesh.h"
+#include "radix_sort.h"
 #include "subdivide.h"
 
 namespace {
@@ -144,18 +145,22 @@ void Subdivider::FindNear(const Mesh& mesh, size_t from) {
     int32_t e;
   };
   size_t count = 0;
+  for (size_t p = 0; p < mesh.patches.size(); ++p) count += mesh.Tops(int(p)).size();
+  // The grid's origin below every centroid: the vertices' least corner (a
+  // centroid is their mean), one pass over an array where the centroids
+  // were a pass of scattered reads each (7-10 ms at 260,000 tops).
   glm::dvec3 lo(HUGE_VAL);
-  for (size_t p = 0; p < mesh.patches.size(); ++p) {
-    count += mesh.Tops(int(p)).size();
-    for (int e : mesh.Tops(int(p))) lo = glm::min(lo, mesh.Centroid(e));
-  }
+  for (const glm::dvec3& v : mesh.verts) lo = glm::min(lo, v);
   auto cell_of = [&](const glm::dvec3& x) { return glm::ivec3(glm::floor((x - lo) / cell)); };
   std::vector<Top> tops;
   tops.reserve(count);
   for (size_t p = 0; p < mesh.patches.size(); ++p)
     for (int e : mesh.Tops(int(p))) tops.push_back({CellKey(cell_of(mesh.Centroid(e))), e});
-  std::sort(tops.begin(), tops.end(),
-            [](const Top& a, const Top& b) { return a.key != b.key ? a.key < b.key : a.e < b.e; });
+  // By cell only: the search asks whether a cell holds a close element,
+  // not which, so the order within a cell does not matter. Linear (16
+  // bytes a top more while it sorts) where std::sort took 26-35 ms at
+  // 260,000 tops.
+  RadixSort(&tops, [](const Top& t) { return t.key; });
   for (size_t p = from; p < n; ++p) {
     if (!Splittable(mesh, int(p), &tops_)) continue;
     const Patch& patch = mesh.patches[p];
@@ -177,14 +182,15 @@ void Subdivider::FindNear(const Mesh& mesh, size_t from) {
       for (const Top& t : tops)
         if ((found = close(t))) break;
     } else {
+      // A row of cells along z is one run of keys (z is the key's low
+      // bits, clamped alike): one search a row, not a cell.
       for (int x = a.x; x <= b.x && !found; ++x)
-        for (int y = a.y; y <= b.y && !found; ++y)
-          for (int z = a.z; z <= b.z && !found; ++z) {
-            const uint64_t key = CellKey({x, y, z});
-            auto it = std::lower_bound(tops.begin(), tops.end(), key,
-                                       [](const Top& t, uint64_t k) { return t.key < k; });
-            for (; it != tops.end() && it->key == key && !found; ++it) found = close(*it);
-          }
+        for (int y = a.y; y <= b.y && !found; ++y) {
+          const uint64_t first = CellKey({x, y, a.z}), last = CellKey({x, y, b.z});
+          auto it = std::lower_bound(tops.begin(), tops.end(), first,
+                                     [](const Top& t, uint64_t k) { return t.key < k; });
+          for (; it != tops.end() && it->key <= last && !found; ++it) found = close(*it);
+        }
     }
     near_[p] = found;
   }
