@@ -277,14 +277,21 @@ void MasterRun::Build() {
   if (solver_->Dark())  // a legal scene, but most likely a missing Ke
     Say("warning: " + opts_.scene_path + ": no face emits light (Ke); every B is 0");
   run_.wave_end = [this](int wave) {
-    const auto shaded = Picture(solver_->radiosity(), {FrameName(wave)}).first;
-    // The view shows the wave's end, and nothing of the next wave until
-    // it is as far (a new wave starts again from the lights): the picture
-    // never goes back to a less converged one. A copy: the picture's
-    // thread draws from this one meanwhile.
-    if (view_) {
-      view_->Snapshot(solver_->shots(), [&] { return *shaded; });
-      view_floor_ = last_unshot_;
+    if (opts_.Alone() || view_) {
+      const auto shaded = Picture(solver_->radiosity(), {FrameName(wave)}).first;
+      // The view shows the wave's end, and nothing of the next wave until
+      // it is as far (a new wave starts again from the lights): the
+      // picture never goes back to a less converged one. A copy: the
+      // picture's thread draws from this one meanwhile.
+      if (view_) {
+        view_->Snapshot(solver_->shots(), [&] { return *shaded; });
+        view_floor_ = last_unshot_;
+      }
+    } else {
+      // Workers wait for nothing the picture needs: at 5x10^5 elements
+      // shading and exposure took 0.2-0.25 s a wave on the master's
+      // thread, every worker idle.
+      PictureLater(solver_->radiosity(), {FrameName(wave)});
     }
     if (opts_.verbosity >= 2)
       std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", wave, mesh_.LeafCount());
@@ -510,6 +517,26 @@ std::pair<std::shared_ptr<const ShadedMesh>, float> MasterRun::Picture(
   return {std::move(shaded), exposure};
 }
 
+void MasterRun::PictureLater(const ElemB& b, const std::vector<std::string>& paths) {
+  PicturesDone();  // one picture's pixels at a time (up to 18 bytes a pixel, image.h)
+  auto copy = std::make_shared<std::vector<glm::dvec3>>(b);
+  auto drawn = std::make_shared<std::promise<void>>();
+  drawn_ = drawn->get_future().share();
+  writers_.Start([this, copy, drawn, paths](std::string* e) {
+    // Only reads the mesh, which the master's thread leaves as it is
+    // until Drawn() (RunOptions::mesh_changes, the run's end).
+    auto shaded = std::make_unique<const ShadedMesh>(Shade(mesh_, *copy));
+    copy->clear();
+    copy->shrink_to_fit();
+    const float exposure = AutoExposure(*shaded);
+    Image img;
+    Render(*shaded, camera_, opts_.width, opts_.height, &img);
+    shaded.reset();
+    drawn->set_value();
+    return WriteImage(img, exposure, paths, opts_.format, e);
+  });
+}
+
 void MasterRun::Drawn() {
   if (drawn_.valid()) drawn_.wait();
 }
@@ -527,6 +554,7 @@ void MasterRun::Run() {
   const double pool_cpu = pool_thread_ ? pool_thread_->CpuSeconds() : 0;
   transport_.reset();  // with -j 0 the hemicube's buffers, freed before the pictures
   pool_thread_ = nullptr;
+  Drawn();  // the last wave's picture may still be reading the mesh
   ReleaseEdges(&mesh_);  // and subdivision's edge maps: nothing is divided after the run
   progress_->Finish();
   const RunResult& r = result_;

@@ -100,6 +100,12 @@ class MasterRun {
   std::pair<std::shared_ptr<const ShadedMesh>, float> Picture(const ElemB& b,
                                                               const std::vector<std::string>& paths,
                                                               const std::string& hdr_path = "");
+  // A wave's picture of `b` made wholly on a thread of writers_: shaded,
+  // exposed and drawn there from a copy of b (24 bytes an element until it
+  // is shaded), then written to every path, so that the workers compute
+  // the next wave's columns while it is made. The mesh must not change
+  // before Drawn().
+  void PictureLater(const ElemB& b, const std::vector<std::string>& paths);
   // Waits until the last picture is drawn (its files may still be being
   // encoded and written).
   void Drawn();

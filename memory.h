@@ -28,8 +28,12 @@
 // the highest, 404, with about 11% room, since subdivision's limit
 // (app.cpp) takes it as the cost of every element (460 at d8ab6ac; 490
 // at 597cf95, from 429; 520 at 7afbefc, from that pass's 462 at
-// 0cd4817).
-constexpr double kMasterBytesPerElement = 450;
+// 0cd4817). Since a wave's picture is shaded on the writers' thread
+// from a copy of its radiosity (MasterRun::PictureLater: 24 bytes an
+// element while it shades, beside the next wave's arrays), the master of
+// -j 1 peaks at 424 to 425 (-j 0, which makes it on its own thread, at
+// 399 to 402): 470, about 11% room again (450 before).
+constexpr double kMasterBytesPerElement = 470;
 // A worker: the mesh, its adjacency once divisions come, the hemicube.
 // It forms no shooter groups (the master sends them with the work), so
 // groups or not it measured the same: 147 to 148 over 2 shots, at the

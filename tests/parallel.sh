@@ -33,6 +33,20 @@ ARGS=(-e 1e-5 -r 128)
 run_ok_shared "maze, sequential" "$T/seq" -j 0 "${ARGS[@]}" "$MAZE" || finish
 run_ok "maze, -j 2" "$T/j2" -j 2 -v "${ARGS[@]}" "$MAZE" &&
   check_same "maze: -j 2 agrees with -j 0" "$T/j2/result.csv" "$T/seq/result.csv" 0.5
+# A frame per wave with workers too: shaded, exposed and drawn on the
+# writers' thread while the next wave shoots (MasterRun::PictureLater),
+# each a PNG of the default size (IHDR: 512 x 512).
+if [ -s "$T/j2/log.csv" ]; then
+  n=$(awk -F, 'END { print $3 }' "$T/j2/log.csv")
+  frames=$(cd "$T/j2" && ls frame-*.png 2>/dev/null | tr '\n' ' ')
+  want=$(for i in $(seq 1 "$n"); do printf 'frame-%02d.png ' "$i"; done)
+  sizes=$(for f in "$T"/j2/frame-*.png; do od -An -tx1 -j 16 -N 8 "$f" | tr -d ' \n'; echo; done | sort -u)
+  if [ "$n" -ge 2 ] && [ "$frames" = "$want" ] && [ "$sizes" = 0000020000000200 ]; then
+    pass "maze, -j 2: a frame per wave, each 512x512 ($n waves)"
+  else
+    fail "maze, -j 2: a frame per wave (got '$frames' of sizes '$sizes', want '$want' of 512x512, 2 or more)"
+  fi
+fi
 run_ok "maze, -j 4 --pool-thread" "$T/j4" -j 4 -v --pool-thread "${ARGS[@]}" "$MAZE" &&
   check_same "maze: -j 4 --pool-thread agrees with -j 0" "$T/j4/result.csv" "$T/seq/result.csv" 0.5
 # -v names the pool thread where there is one: by default only when the
