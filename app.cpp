@@ -158,13 +158,16 @@ void Writers::Start(std::function<bool(std::string* err)> write) {
   });
 }
 
-std::string Writers::Wait() {
+std::string Writers::Wait() { return WaitOlder(0); }
+
+std::string Writers::WaitOlder(size_t keep) {
   std::string first;
-  for (Job& job : jobs_) {
+  while (jobs_.size() > keep) {
+    Job& job = jobs_.front();
     job.thread.join();
     if (first.empty()) first = job.err;
+    jobs_.pop_front();
   }
-  jobs_.clear();
   return first;
 }
 
@@ -518,7 +521,15 @@ std::pair<std::shared_ptr<const ShadedMesh>, float> MasterRun::Picture(
 }
 
 void MasterRun::PictureLater(const ElemB& b, const std::vector<std::string>& paths) {
-  PicturesDone();  // one picture's pixels at a time (up to 18 bytes a pixel, image.h)
+  // One picture's pixels at a time (about 18 bytes a pixel, image.h), or
+  // two when both take no more than 64 MiB: the maze's waves end about
+  // as often as a 512 x 512 PNG takes to encode (30 ms), and the master
+  // waited for the last one's encoding with every worker idle.
+  const double pixels = 18.0 * double(opts_.width) * double(opts_.height);
+  const std::string err = writers_.WaitOlder(2 * pixels <= 64.0 * (1 << 20) ? 1 : 0);
+  if (!err.empty()) Die(kExitFailure, err);
+  // The last one drawn, though: only the newest may read the mesh (Drawn).
+  Drawn();
   auto copy = std::make_shared<std::vector<glm::dvec3>>(b);
   auto drawn = std::make_shared<std::promise<void>>();
   drawn_ = drawn->get_future().share();

@@ -58,6 +58,9 @@ class Writers {
   void Start(std::function<bool(std::string* err)> write);
   // Waits for every write started; the first error, or "".
   std::string Wait();
+  // Waits for the oldest writes until at most `keep` are running; the
+  // first error of those, or "".
+  std::string WaitOlder(size_t keep);
 
  private:
   struct Job {
