@@ -525,8 +525,8 @@ void MasterRun::PictureLater(const ElemB& b, const std::vector<std::string>& pat
   // two when both take no more than 64 MiB: the maze's waves end about
   // as often as a 512 x 512 PNG takes to encode (30 ms), and the master
   // waited for the last one's encoding with every worker idle.
-  const double pixels = 18.0 * double(opts_.width) * double(opts_.height);
-  const std::string err = writers_.WaitOlder(2 * pixels <= 64.0 * (1 << 20) ? 1 : 0);
+  const double bytes = 18.0 * double(opts_.width) * double(opts_.height);
+  const std::string err = writers_.WaitOlder(2 * bytes <= 64.0 * (1 << 20) ? 1 : 0);
   if (!err.empty()) Die(kExitFailure, err);
   // The last one drawn, though: only the newest may read the mesh (Drawn).
   Drawn();
