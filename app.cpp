@@ -503,20 +503,8 @@ std::pair<std::shared_ptr<const ShadedMesh>, float> MasterRun::Picture(
   // before the next wave's solver arrays come, at the master's peak
   // (memory.h), and before the picture's pixels.
   const float exposure = AutoExposure(*shaded);
-  // Drawn once, the files encoded in turn on one thread (their buffers one
-  // at a time), while the run, or the rest of the outputs, go on.
-  auto drawn = std::make_shared<std::promise<void>>();
-  drawn_ = drawn->get_future().share();
-  writers_.Start([shaded, exposure, drawn, camera = camera_, width = opts_.width,
-                  height = opts_.height, paths, hdr_path,
-                  format = opts_.format](std::string* e) mutable {
-    Image img;
-    Render(*shaded, camera, width, height, &img);
-    shaded.reset();  // not read again (nor its lent points)
-    drawn->set_value();
-    return WriteImage(img, exposure, paths, format, e) &&
-           (hdr_path.empty() || WriteRadianceHdr(img, hdr_path, e));
-  });
+  StartDrawing([shaded, exposure]() mutable { return std::make_pair(std::move(shaded), exposure); },
+               paths, hdr_path);
   return {std::move(shaded), exposure};
 }
 
@@ -531,20 +519,35 @@ void MasterRun::PictureLater(const ElemB& b, const std::vector<std::string>& pat
   // The last one drawn, though: only the newest may read the mesh (Drawn).
   Drawn();
   auto copy = std::make_shared<std::vector<glm::dvec3>>(b);
+  StartDrawing(
+      [this, copy] {
+        // Only reads the mesh, which the master's thread leaves as it is
+        // until Drawn() (RunOptions::mesh_changes, the run's end).
+        auto shaded = std::make_shared<const ShadedMesh>(Shade(mesh_, *copy));
+        copy->clear();
+        copy->shrink_to_fit();
+        const float exposure = AutoExposure(*shaded);
+        return std::make_pair(std::move(shaded), exposure);
+      },
+      paths, "");
+}
+
+void MasterRun::StartDrawing(Shading shade, const std::vector<std::string>& paths,
+                             const std::string& hdr_path) {
+  // Drawn once, the files encoded in turn on one thread (their buffers one
+  // at a time), while the run, or the rest of the outputs, go on.
   auto drawn = std::make_shared<std::promise<void>>();
   drawn_ = drawn->get_future().share();
-  writers_.Start([this, copy, drawn, paths](std::string* e) {
-    // Only reads the mesh, which the master's thread leaves as it is
-    // until Drawn() (RunOptions::mesh_changes, the run's end).
-    auto shaded = std::make_unique<const ShadedMesh>(Shade(mesh_, *copy));
-    copy->clear();
-    copy->shrink_to_fit();
-    const float exposure = AutoExposure(*shaded);
+  writers_.Start([shade = std::move(shade), drawn, camera = camera_, width = opts_.width,
+                  height = opts_.height, paths, hdr_path,
+                  format = opts_.format](std::string* e) mutable {
+    auto picture = shade();
     Image img;
-    Render(*shaded, camera_, opts_.width, opts_.height, &img);
-    shaded.reset();
+    Render(*picture.first, camera, width, height, &img);
+    picture.first.reset();  // not read again (nor its lent points)
     drawn->set_value();
-    return WriteImage(img, exposure, paths, opts_.format, e);
+    return WriteImage(img, picture.second, paths, format, e) &&
+           (hdr_path.empty() || WriteRadianceHdr(img, hdr_path, e));
   });
 }
 

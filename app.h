@@ -109,6 +109,13 @@ class MasterRun {
   // the next wave's columns while it is made. The mesh must not change
   // before Drawn().
   void PictureLater(const ElemB& b, const std::vector<std::string>& paths);
+  // Both: on a thread of writers_, `shade` gives the shaded mesh and its
+  // exposure; drawn from it (Drawn() waits for that), the mesh is let go
+  // and the picture written to every path (and to hdr_path as Radiance
+  // RGBE, if given).
+  using Shading = std::function<std::pair<std::shared_ptr<const ShadedMesh>, float>()>;
+  void StartDrawing(Shading shade, const std::vector<std::string>& paths,
+                    const std::string& hdr_path);
   // Waits until the last picture is drawn (its files may still be being
   // encoded and written).
   void Drawn();
