@@ -504,6 +504,14 @@ SimOptions::Io MeasureIo() {
   std::string buf(frame.size(), '\0');
   io.epoll_s = io.read_s = io.write_s = io.column_s = HUGE_VAL;
   bool ok = true;
+  // Reads what was written to sv[1] and not yet read, untimed.
+  auto drain = [&](size_t left) {
+    while (ok && left > 0) {
+      const ssize_t n = ::read(sv[0], &buf[0], std::min(left, buf.size()));
+      ok &= n > 0;
+      left -= size_t(std::max<ssize_t>(n, 0));
+    }
+  };
   for (int r = 0; r < kRounds && ok; ++r) {
     double c0 = ThreadCpuSeconds();
     for (int i = 0; i < kCalls; ++i) ok &= ::write(sv[1], work.data(), work.size()) == ssize_t(work.size());
@@ -512,11 +520,7 @@ SimOptions::Io MeasureIo() {
     epoll_event got[16];
     for (int i = 0; i < kCalls; ++i) ok &= ::epoll_wait(ep, got, 16, 0) == 1;
     io.epoll_s = std::min(io.epoll_s, (ThreadCpuSeconds() - c0) / kCalls);
-    for (size_t left = work.size() * kCalls; ok && left > 0;) {  // drained, untimed
-      const ssize_t n = ::read(sv[0], &buf[0], std::min(left, buf.size()));
-      ok &= n > 0;
-      left -= size_t(std::max<ssize_t>(n, 0));
-    }
+    drain(work.size() * kCalls);
     for (int i = 0; i < kCalls; ++i) ok &= ::write(sv[1], frame.data(), frame.size()) == ssize_t(frame.size());
     c0 = ThreadCpuSeconds();
     for (int i = 0; i < kCalls; ++i) ok &= ::read(sv[0], &buf[0], buf.size()) == ssize_t(buf.size());
@@ -532,11 +536,7 @@ SimOptions::Io MeasureIo() {
       ok &= ThreadCpuSeconds() >= 0 && ThreadCpuSeconds() >= 0;
     }
     io.column_s = std::min(io.column_s, (ThreadCpuSeconds() - c0) / kCalls);
-    for (size_t left = frame.size() * kCalls; ok && left > 0;) {  // drained, untimed
-      const ssize_t n = ::read(sv[0], &buf[0], std::min(left, buf.size()));
-      ok &= n > 0;
-      left -= size_t(std::max<ssize_t>(n, 0));
-    }
+    drain(frame.size() * kCalls);
   }
   ::close(ep);
   ::close(sv[0]);
