@@ -27,7 +27,7 @@ NPROC    := $(shell nproc 2>/dev/null || echo 1)
 SAN      := -O1 -g1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
 # Everything but main(): linked into the program and into the unit tests.
-LIB_SRCS  := options.cpp app.cpp clock.cpp scene.cpp surface.cpp mesh.cpp divide.cpp split.cpp groups.cpp hemicube.cpp hemicube_cache.cpp subdivide.cpp solver.cpp shooters.cpp scheduler.cpp queues.cpp idle.cpp results.cpp image.cpp exr.cpp coding.cpp ffcodec.cpp protocol.cpp version.cpp inprocess.cpp pool.cpp pool_thread.cpp worker.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp files.cpp memory.cpp view.cpp viewserver.cpp
+LIB_SRCS  := options.cpp app.cpp writers.cpp clock.cpp scene.cpp surface.cpp mesh.cpp divide.cpp split.cpp groups.cpp hemicube.cpp hemicube_cache.cpp subdivide.cpp solver.cpp shooters.cpp scheduler.cpp queues.cpp idle.cpp results.cpp image.cpp exr.cpp coding.cpp ffcodec.cpp protocol.cpp version.cpp inprocess.cpp pool.cpp pool_thread.cpp worker.cpp hosts.cpp crypto.cpp ssh.cpp connect.cpp source.cpp checkpoint.cpp progress.cpp svg.cpp errorchart.cpp files.cpp memory.cpp view.cpp viewserver.cpp
 # Only for the unit tests and the benchmarks, never in the program.
 SIM_SRCS  := sim.cpp
 TEST_SRCS := $(wildcard tests/*_test.cpp)

@@ -7,11 +7,9 @@
 #include <cmath>
 #include <functional>
 #include <future>
-#include <list>
 #include <memory>
 #include <mutex>
 #include <string>
-#include <thread>
 #include <utility>
 #include <vector>
 
@@ -31,6 +29,7 @@
 #include "transport.h"
 #include "view.h"
 #include "viewserver.h"
+#include "writers.h"
 
 // A message as the terminal may show it: names from the command line and
 // the scene can hold control characters and escape sequences, shown as \xNN.
@@ -44,31 +43,6 @@ ExitStatus DumpHosts(const Options& opts);
 ExitStatus WorkerMain(const Options& opts);
 
 class ThreadedPool;
-
-// Files written on threads of their own while the master goes on: a
-// wave's picture took 65-80 ms on the room, 45-60 of them encoding the
-// PNG, time in which the master's loop fed no worker (bench/defaults.sh).
-class Writers {
- public:
-  Writers() = default;
-  Writers(const Writers&) = delete;
-  Writers& operator=(const Writers&) = delete;
-  ~Writers() { Wait(); }
-  // Runs `write` (false with *err on failure) on a thread of its own.
-  void Start(std::function<bool(std::string* err)> write);
-  // Waits for every write started; the first error, or "".
-  std::string Wait();
-  // Waits for the oldest writes until at most `keep` are running; the
-  // first error of those, or "".
-  std::string WaitOlder(size_t keep);
-
- private:
-  struct Job {
-    std::thread thread;
-    std::string err;  // written by the job's thread only, read after join
-  };
-  std::list<Job> jobs_;  // a list: a running job's err stays where it is
-};
 
 // A master's run in the order main takes it.
 class MasterRun {
