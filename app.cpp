@@ -566,10 +566,10 @@ void MasterRun::Run() {
     for (const RunResult::Worker& w : r.workers)
       std::fprintf(stderr,
                    "radiosity: %s: %ld columns, %ld deferred, %ld taken back; queue %d..%d sent, %d at the "
-                   "end, high watermark up to %d; %.2f ms a column, %.2f ms on the wire, one "
-                   "every %.2f ms\n",
+                   "end, high watermark up to %d, %d more before passes; %.2f ms a column, %.2f ms on "
+                   "the wire, one every %.2f ms\n",
                    Printable(w.name).c_str(), w.columns, w.deferred, w.reclaimed, w.depth_min, w.depth_max,
-                   w.depth, w.high_max, 1e3 * w.column_s, 1e3 * w.wire_s, 1e3 * w.interval_s);
+                   w.depth, w.high_max, w.reserve_max, 1e3 * w.column_s, 1e3 * w.wire_s, 1e3 * w.interval_s);
   if (opts_.verbosity >= 2 && r.joined > 0)
     std::fprintf(stderr,
                  "radiosity: workers idle %.3f s: %.3f s in pictures, %.3f s in division "

@@ -107,6 +107,7 @@ struct RunResult {
     int depth_min = 0, depth_max = 0;  // patches sent and unanswered, at most
     int depth = 0;                     // the last, at the end of the run
     int high_max = 0;                  // the high watermark's largest
+    int reserve_max = 0;               // the most columns held more before a pass
     double column_s = 0;    // its compute time per column (smoothed)
     double wire_s = 0;      // a column's time on the wire (smoothed)
     double interval_s = 0;  // between its columns while it had more (smoothed)

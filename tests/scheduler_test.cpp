@@ -498,6 +498,38 @@ TEST(Scheduler, WorkGoesOutBeforeAPassOrAPicture) {
   EXPECT_EQ(unsent_at_picture, std::vector<long>(size_t(r.waves - 1), 0));
 }
 
+// Before a division pass each worker is given work for as long as the
+// last pass took (50 ms here, its columns 1 ms each and answered one
+// worker a Poll): 2 or 3 columns a queue otherwise. Not with --queue.
+TEST(Scheduler, WorkersHoldWorkForAPass) {
+  for (const int queue : {0, 4}) {
+    DividingRun run;
+    FakeTransport& t = run.t;
+    t.quiet_every_ = 5;
+    run.o.queue = queue;
+    std::vector<size_t> held;  // per pass: the fewest assignments a worker held
+    run.o.mesh_changes = [&] {
+      size_t least = SIZE_MAX;
+      for (const auto& q : t.queue_) least = std::min(least, q.size());
+      held.push_back(least);
+      t.now_ += 0.05;
+      t.burst_ = true;
+    };
+    const RunResult r = run.Run();
+    ASSERT_EQ(r.status, RunStatus::kConverged);
+    ASSERT_GE(held.size(), 3u);
+    // The first pass, not timed yet, is taken to be short on this mesh.
+    const size_t later = *std::min_element(held.begin() + 1, held.end());
+    if (queue == 0) {
+      EXPECT_GE(later, 10u);
+      for (const RunResult::Worker& w : r.workers) EXPECT_GE(w.reserve_max, 10);
+    } else {
+      EXPECT_LE(t.max_outstanding_, size_t(queue));
+      for (const RunResult::Worker& w : r.workers) EXPECT_EQ(w.reserve_max, 0);
+    }
+  }
+}
+
 // Idle accounting: a picture that takes the master a second leaves both
 // workers idle for about that second (their queues hold a few
 // milliseconds of work), counted as the picture's; pictures that take no
