@@ -616,18 +616,29 @@ void MasterRun::WriteOutputs() {
   const bool capped = subdivider_ && subdivider_->capped();
   solver_.reset();
   subdivider_.reset();
-  const std::vector<glm::dvec3> face_b = FaceRadiosity(mesh_, b);
-  if (!WriteResultCsv(staging_.Path("result.csv"), scene_, face_b, &err)) Die(kExitFailure, err);
+  auto face_b = std::make_shared<const std::vector<glm::dvec3>>(FaceRadiosity(mesh_, b));
   const auto picture = Picture(b, {FrameName(r.waves), staging_.Path("final." + opts_.format)},
                                staging_.Path("final.hdr"));
-  const ShadedMesh& shaded = *picture.first;
+  const std::shared_ptr<const ShadedMesh> shared = picture.first;
+  const ShadedMesh& shaded = *shared;
   const float exposure = picture.second;
   if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", r.waves, mesh_.LeafCount());
-  if (!WritePly(shaded, exposure, staging_.Path("result.ply"), &err) ||
-      !WriteGltf(shaded, exposure, staging_.Path("result.gltf"),
-                 staging_.Path("result.bin"), &err))
-    Die(kExitFailure, err);
+  // The files side by side on the writers' threads, beside the picture's
+  // drawing and encoding: one after another on the master's thread they
+  // took 0.5 s of boxes20000's end (536,760 elements). Each reads only
+  // what is made here, and the scene, which nothing changes now; all are
+  // waited for, and a failure reported, at the commit.
+  writers_.Start([this, face_b, path = staging_.Path("result.csv")](std::string* e) {
+    return WriteResultCsv(path, scene_, *face_b, e);
+  });
+  writers_.Start([shared, exposure, path = staging_.Path("result.ply")](std::string* e) {
+    return WritePly(*shared, exposure, path, e);
+  });
+  writers_.Start([shared, exposure, gltf = staging_.Path("result.gltf"),
+                  bin = staging_.Path("result.bin")](std::string* e) {
+    return WriteGltf(*shared, exposure, gltf, bin, e);
+  });
   const std::string how = r.status == RunStatus::kConverged ? "converged"
                           : r.status == RunStatus::kStopped ? StoppedBy()
                                                             : r.why;
@@ -639,18 +650,19 @@ void MasterRun::WriteOutputs() {
     final_state.snapshot = 1;
     final_state.snapshot_shots = r.shots;
     // Written as it is encoded: at 10^6 elements the page is some 100 MB.
-    const std::string state = ViewStateJson(ViewOf(), final_state, log_.rows(), 0);
-    if (!WriteFileAtomic(staging_.Path("view.html"),
-                         [&](const FileSink& put) {
-                           return WriteOfflineViewPage(
-                               state,
-                               [&](const FileSink& blob) {
-                                 return ViewMeshBlob(shaded, exposure, blob);
-                               },
-                               put);
-                         },
-                         &err))
-      Die(kExitFailure, err);
+    writers_.Start([shared, exposure, state = ViewStateJson(ViewOf(), final_state, log_.rows(), 0),
+                    path = staging_.Path("view.html")](std::string* e) {
+      return WriteFileAtomic(path,
+                             [&](const FileSink& put) {
+                               return WriteOfflineViewPage(
+                                   state,
+                                   [&](const FileSink& blob) {
+                                     return ViewMeshBlob(*shared, exposure, blob);
+                                   },
+                                   put);
+                             },
+                             e);
+    });
     if (view_) view_->Finish(ViewMeshBlob(shaded, exposure), r.shots, how);
   }
   if (!opts_.converge.empty()) {
@@ -661,7 +673,7 @@ void MasterRun::WriteOutputs() {
       Die(kExitFailure, "--converge " + opts_.converge + ": not written, the run did not converge (" +
                             (r.why.empty() ? std::string("stopped on request") : r.why) + ")");
     }
-    if (!WriteResultCsv(opts_.converge, scene_, face_b, &err)) Die(kExitFailure, err);
+    if (!WriteResultCsv(opts_.converge, scene_, *face_b, &err)) Die(kExitFailure, err);
     if (opts_.verbosity >= 1)
       std::fprintf(stderr, "radiosity: reference (epsilon %g) in %s: use --reference %s\n",
                    run_.epsilon, Printable(opts_.converge).c_str(), Printable(opts_.converge).c_str());

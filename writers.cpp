@@ -6,7 +6,7 @@ void Writers::Start(std::function<bool(std::string* err)> write) {
   jobs_.emplace_back();
   Job& job = jobs_.back();
   job.thread = std::thread([&job, write = std::move(write)] {
-    if (!write(&job.err) && job.err.empty()) job.err = "cannot write a picture";
+    if (!write(&job.err) && job.err.empty()) job.err = "cannot write an output";
   });
 }
 
