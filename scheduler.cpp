@@ -248,6 +248,7 @@ class Scheduler {
   std::vector<int> unsent_;           // slots given work since the last Poll
   double polled_ = 0;                 // when the Poll before the last returned (Handle's bound)
   double pass_s_ = -1;                // the last division pass's time (t_'s clock); -1: none yet
+  long due_at_ = -1;                  // shots when the next pass fell due; -1: not yet
   void CountIdle(double from, double to);
 };
 
@@ -568,17 +569,29 @@ bool Scheduler::Stop() {
   return true;
 }
 
-// A division pass (paper §4.3) when one is due, only while every worker's
-// queue holds at least its low mark and no column waits to be shot, so
-// that the workers stay busy while the master divides. The edits go to
-// every worker in the order they were made.
+// A division pass (paper §4.3) when one is due, once every worker's
+// queue holds at least its low mark and no column waits to be shot (or
+// 10 shots after it fell due), so that the workers stay busy while the
+// master divides. The edits go to every worker in the order they were
+// made.
 void Scheduler::Subdivide() {
-  if (!sub_ || !ready_.empty()) return;
+  if (!sub_) return;
   const long shots_in_wave = solver_->shots() - wave_start_;
   if (!sub_->Due(shots_in_wave) && !sub_->SplitDue(solver_->DirectDone())) return;
-  Reserve(true);
+  // It waits for the columns at hand to be shot and for every queue to
+  // hold its low mark, but not for more than kPassWaitShots shots: a
+  // master as busy as 64 simulated workers keep it (boxes3800) always had
+  // a column at hand and never divided. Columns at hand then are shot
+  // after the pass as columns in flight are. Such a master is what the
+  // workers wait for, not the pass: it gives them no more for it (columns
+  // computed before a pass are shot the slower way, Reserve).
+  constexpr long kPassWaitShots = 10;
+  if (due_at_ < 0) due_at_ = solver_->shots();
+  const bool overdue = solver_->shots() - due_at_ >= kPassWaitShots;
+  if (!ready_.empty() && !overdue) return;
+  if (ready_.empty()) Reserve(true);
   for (const Slot& s : slots_)
-    if (s.alive && Pipelined() && s.Low()) return;
+    if (s.alive && Pipelined() && s.Low() && !overdue) return;
   SendNow();
   const double start = t_->Now();
   if (opts_.mesh_changes) {
@@ -593,6 +606,7 @@ void Scheduler::Subdivide() {
   r_.subdivide_s += MonotonicSeconds() - t0;
   if (sub_->passes() != passes || !edits_.empty()) idle_.Busy(IdleAccount::kPass, now, t_->Now());
   pass_s_ = t_->Now() - start;
+  due_at_ = -1;
   Reserve(false);
   if (over) NextWave();
   unshot_ = solver_->UnshotFraction();
@@ -651,6 +665,7 @@ void Scheduler::NextWave() {
   sub_->StartWave(mesh_);
   ++wave_;
   wave_start_ = best_at_ = solver_->shots();
+  due_at_ = -1;
   best_ = HUGE_VAL;
   unshot_ = solver_->UnshotFraction();
   Emit();

@@ -1,6 +1,6 @@
 // radiosity-cluster: the cluster simulation (sim.h) on any scene, as table
 // rows on stdout (bench/master.sh adds the headers).
-//   radiosity-cluster [--one-thread] [--master-us US] SCENE.obj SHOTS [R] [WORKERS...]
+//   radiosity-cluster [--one-thread] [--divide] [--master-us US] SCENE.obj SHOTS [R] [WORKERS...]
 // The real scheduler and solver drive simulated workers (every column
 // computed for real, the master charged its own measured CPU time, its
 // wake-ups and its system calls) on a
@@ -9,7 +9,11 @@
 // speedup over one simulated worker on the same link, the efficiency, the
 // master's charged time per shot, and the most speedup the master's time
 // allows (paper graph 2: a worker's time per column / the master's per
-// shot). Without subdivision, so that every run shoots the same mesh.
+// shot). Without subdivision, so that every run shoots the same mesh;
+// --divide: with it (the default SubdivideOptions, each run on a copy of
+// the mesh as built), and three more columns: the workers' seconds idle
+// in division passes (RunResult::idle), summed over the workers, the
+// division passes and the waves.
 // --one-thread: the master reads and writes on its own thread, as before
 // pool_thread.h (SimOptions::pool_thread false), to compare.
 // --master-us US: the master is charged US microseconds a turn of its loop
@@ -26,6 +30,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -35,12 +40,18 @@
 #include "scheduler.h"
 #include "sim.h"
 #include "solver.h"
+#include "subdivide.h"
 
 int main(int argc, char** argv) {
   double master_us = -1;
   bool ok = true;
   const bool one_thread = argc > 1 && std::strcmp(argv[1], "--one-thread") == 0;
   if (one_thread) {
+    ++argv;
+    --argc;
+  }
+  const bool divide = argc > 1 && std::strcmp(argv[1], "--divide") == 0;
+  if (divide) {
     ++argv;
     --argc;
   }
@@ -52,7 +63,8 @@ int main(int argc, char** argv) {
     argc -= 2;
   }
   if (argc < 3 || !ok) {
-    std::fprintf(stderr, "usage: radiosity-cluster [--one-thread] [--master-us US] SCENE.obj SHOTS [R] [WORKERS...]\n");
+    std::fprintf(stderr, "usage: radiosity-cluster [--one-thread] [--divide] [--master-us US] SCENE.obj SHOTS [R] "
+                 "[WORKERS...]\n");
     return 2;
   }
   const long shots = std::atol(argv[2]);
@@ -82,19 +94,25 @@ int main(int argc, char** argv) {
       so.io = io;
       so.pool_thread = !one_thread;
       if (master_us >= 0) so.master_cost_s = master_us * 1e-6;
-      SimTransport t(mesh, so);
-      Solver solver(mesh, true);
+      Mesh m = divide ? mesh : Mesh();
+      Mesh& run_mesh = divide ? m : mesh;
+      SimTransport t(run_mesh, so);
+      Solver solver(run_mesh, true);
+      std::unique_ptr<Subdivider> sub;
+      if (divide) sub = std::make_unique<Subdivider>(&run_mesh, SubdivideOptions());
       RunOptions o;
       o.resolution = res;
       o.epsilon = 1e-12;
       o.max_shots = shots;
-      const RunResult r = RunMaster(&mesh, o, &solver, nullptr, &t, nullptr, nullptr);
+      const RunResult r = RunMaster(&run_mesh, o, &solver, sub.get(), &t, nullptr, nullptr);
       const double per_shot = t.MasterSeconds() / double(r.shots);
       const double column = r.worker_s / double(r.columns);
       if (w == 1) one = r.seconds;
-      std::printf("| %s | %ld | %ld | %.0f Gbit/s | %d | %.3f | %.1f | %.2f | %.1f | %.0f |\n",
-                  name.c_str(), long(mesh.elems.size()), r.shots, bps / 1e9, w, r.seconds,
+      std::printf("| %s | %ld | %ld | %.0f Gbit/s | %d | %.3f | %.1f | %.2f | %.1f | %.0f |",
+                  name.c_str(), long(run_mesh.elems.size()), r.shots, bps / 1e9, w, r.seconds,
                   one / r.seconds, one / r.seconds / w, 1e6 * per_shot, column / per_shot);
+      if (divide) std::printf(" %.3f | %ld | %d |", r.idle.pass, r.passes, r.waves);
+      std::printf("\n");
       std::fflush(stdout);
     }
   }
