@@ -618,10 +618,10 @@ void Scheduler::Subdivide() {
 // workers waited out most of each (0.9 worker-seconds in 300 shots). The
 // length is the last pass's (the wait for a wave's picture to be drawn
 // with it; a wave's end, once a wave, not), or until one has been timed,
-// kFirstPassPerElement a leaf. The columns come back
-// after the pass, computed on the mesh before it, and are shot as
-// columns in flight are (Solver::Shoot: a divided element's leaves gain
-// alike). Not with --queue: the user's high mark is the bound.
+// kFirstPassPerElement a leaf. The columns come back after the pass,
+// computed on the mesh before it, and are shot as columns in flight are
+// (Solver::Shoot: a divided element's leaves gain alike). Not with
+// --queue: the user's high mark is the bound.
 void Scheduler::Reserve(bool on) {
   // boxes20000's first pass (with the shooter splits' first search):
   // 0.24 s at 529,260 elements.
@@ -666,6 +666,7 @@ void Scheduler::NextWave() {
   ++wave_;
   wave_start_ = best_at_ = solver_->shots();
   due_at_ = -1;
+  Reserve(false);  // a new wave's lights are dealt out to the queues as they are
   best_ = HUGE_VAL;
   unshot_ = solver_->UnshotFraction();
   Emit();
