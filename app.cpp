@@ -619,8 +619,7 @@ void MasterRun::WriteOutputs() {
   auto face_b = std::make_shared<const std::vector<glm::dvec3>>(FaceRadiosity(mesh_, b));
   const auto picture = Picture(b, {FrameName(r.waves), staging_.Path("final." + opts_.format)},
                                staging_.Path("final.hdr"));
-  const std::shared_ptr<const ShadedMesh> shared = picture.first;
-  const ShadedMesh& shaded = *shared;
+  const std::shared_ptr<const ShadedMesh> shaded = picture.first;
   const float exposure = picture.second;
   if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: wave %d ends: %ld elements\n", r.waves, mesh_.LeafCount());
@@ -632,12 +631,12 @@ void MasterRun::WriteOutputs() {
   writers_.Start([this, face_b, path = staging_.Path("result.csv")](std::string* e) {
     return WriteResultCsv(path, scene_, *face_b, e);
   });
-  writers_.Start([shared, exposure, path = staging_.Path("result.ply")](std::string* e) {
-    return WritePly(*shared, exposure, path, e);
+  writers_.Start([shaded, exposure, path = staging_.Path("result.ply")](std::string* e) {
+    return WritePly(*shaded, exposure, path, e);
   });
-  writers_.Start([shared, exposure, gltf = staging_.Path("result.gltf"),
+  writers_.Start([shaded, exposure, gltf = staging_.Path("result.gltf"),
                   bin = staging_.Path("result.bin")](std::string* e) {
-    return WriteGltf(*shared, exposure, gltf, bin, e);
+    return WriteGltf(*shaded, exposure, gltf, bin, e);
   });
   const std::string how = r.status == RunStatus::kConverged ? "converged"
                           : r.status == RunStatus::kStopped ? StoppedBy()
@@ -650,20 +649,20 @@ void MasterRun::WriteOutputs() {
     final_state.snapshot = 1;
     final_state.snapshot_shots = r.shots;
     // Written as it is encoded: at 10^6 elements the page is some 100 MB.
-    writers_.Start([shared, exposure, state = ViewStateJson(ViewOf(), final_state, log_.rows(), 0),
+    writers_.Start([shaded, exposure, state = ViewStateJson(ViewOf(), final_state, log_.rows(), 0),
                     path = staging_.Path("view.html")](std::string* e) {
       return WriteFileAtomic(path,
                              [&](const FileSink& put) {
                                return WriteOfflineViewPage(
                                    state,
                                    [&](const FileSink& blob) {
-                                     return ViewMeshBlob(*shared, exposure, blob);
+                                     return ViewMeshBlob(*shaded, exposure, blob);
                                    },
                                    put);
                              },
                              e);
     });
-    if (view_) view_->Finish(ViewMeshBlob(shaded, exposure), r.shots, how);
+    if (view_) view_->Finish(ViewMeshBlob(*shaded, exposure), r.shots, how);
   }
   if (!opts_.converge.empty()) {
     // A reference must be converged: one cut short by -s, -t or a signal

@@ -82,6 +82,12 @@ struct Slot {
   // 500 shots at 108 us a shot instead of 30.
   size_t Queued() const { return Owned() + size_t(waiting); }
   bool Low() const { return Queued() < size_t(pace.low); }
+  // Its high mark and depth with the reserve: what Fill fills it to and
+  // Assign sends it.
+  size_t High() const { return size_t(pace.high + reserve); }
+  size_t Depth() const { return size_t(pace.depth + reserve); }
+  // Fill is due: under its low mark, or under a reserve just given.
+  bool Short() const { return Low() || (reserve > 0 && Queued() < High()); }
 };
 
 // The master's parts are timed with the monotonic clock: the thread's CPU
@@ -443,8 +449,7 @@ void Scheduler::Fill() {
   const long shots = solver_->shots();
   bool low = false;
   for (const Slot& s : slots_)
-    low |= s.alive && (s.Low() || (s.reserve > 0 && s.Queued() < size_t(s.pace.high + s.reserve))) &&
-           shots >= s.retry_at;
+    low |= s.alive && s.Short() && shots >= s.retry_at;
   if (!low) return;
   Deferrals();
   Reclaim();
@@ -452,8 +457,7 @@ void Scheduler::Fill() {
     more = false;
     for (size_t w = 0; w < slots_.size(); ++w) {
       Slot& s = slots_[w];
-      if (!s.alive || s.Queued() >= size_t(s.pace.high + s.reserve) || shots < s.retry_at)
-        continue;
+      if (!s.alive || s.Queued() >= s.High() || shots < s.retry_at) continue;
       if (skip_[w] > 0 && pending_.empty()) {
         int p = PatchBelow(solver_, skip_[w], &held_);
         // Fewer have power than it should skip. With nothing of its own it
@@ -513,7 +517,7 @@ void Scheduler::Fill() {
 void Scheduler::Assign() {
   for (size_t w = 0; w < slots_.size(); ++w) {
     Slot& s = slots_[w];
-    while (s.alive && !s.prepared.empty() && s.sent.size() < size_t(s.pace.depth + s.reserve)) {
+    while (s.alive && !s.prepared.empty() && s.sent.size() < s.Depth()) {
       const int p = s.prepared.front();
       s.prepared.pop_front();
       // A group goes with its shooter's every assignment, a resent one

@@ -1,6 +1,7 @@
 // Files written on threads of their own while the master goes on (the
-// pictures of a run, and its outputs at the end, app.cpp): what runs there and in what order is the
-// caller's; this only starts, waits and keeps the first error.
+// pictures of a run, and its outputs at the end, app.cpp): what runs
+// there and in what order is the caller's; this only starts, waits and
+// keeps the first error.
 #ifndef RADIOSITY_WRITERS_H
 #define RADIOSITY_WRITERS_H
 

@@ -94,8 +94,7 @@ int main(int argc, char** argv) {
       so.io = io;
       so.pool_thread = !one_thread;
       if (master_us >= 0) so.master_cost_s = master_us * 1e-6;
-      Mesh m = divide ? mesh : Mesh();
-      Mesh& run_mesh = divide ? m : mesh;
+      Mesh run_mesh = mesh;  // --divide changes it
       SimTransport t(run_mesh, so);
       Solver solver(run_mesh, true);
       std::unique_ptr<Subdivider> sub;
