@@ -51,7 +51,7 @@ $(B)/radiosity-bench: $(B)/bench/bench.o $(LIB_OBJS)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 # The column alone at any scene size; links only what a column needs.
-$(B)/radiosity-column: $(B)/bench/column.o $(B)/clock.o $(B)/scene.o $(B)/surface.o $(B)/mesh.o $(B)/divide.o $(B)/groups.o $(B)/files.o $(B)/hemicube.o $(B)/hemicube_cache.o $(B)/memory.o
+$(B)/radiosity-column: $(B)/bench/column.o $(B)/clock.o $(B)/scene.o $(B)/surface.o $(B)/mesh.o $(B)/divide.o $(B)/groups.o $(B)/files.o $(B)/hemicube.o $(B)/hemicube_cache.o $(B)/memory.o $(B)/solver.o $(B)/shooters.o
 	$(CXX) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 $(B)/radiosity-parallel: $(B)/bench/parallel.o $(LIB_OBJS) $(SIM_OBJS)

@@ -1,8 +1,11 @@
 // radiosity-column: the form-factor column alone, at any scene size, as
 // one table row on stdout (bench/column.sh adds the headers and runs it
 // for the program before and after a change, side by side).
-//   radiosity-column SCENE.obj R COLUMNS [PATCH_SIZE [ELEMENTS_PER_PATCH [JOIN]]]
-// COLUMNS shooters spread evenly over the patches; per column: CPU time,
+//   radiosity-column [--first] SCENE.obj R COLUMNS [PATCH_SIZE [ELEMENTS_PER_PATCH [JOIN]]]
+// COLUMNS shooters spread evenly over the patches, or with --first the
+// first COLUMNS a run shoots (-j 0's order, no subdivision): the lights
+// and the large surfaces that see most of the scene, dearer than the
+// average shooter on a big scene; per column: CPU time,
 // split into the stages in the proportions ColumnStats measures, the cost
 // model (15 ns/element + 70 ns/covered element + 3 ns/pixel) and how many
 // elements the column visited (on faces it did not cull) out of all. Uses only what
@@ -21,11 +24,17 @@
 #include "hemicube.h"
 #include "mesh.h"
 #include "scene.h"
+#include "solver.h"
 
 int main(int argc, char** argv) {
+  const bool first = argc > 1 && std::string(argv[1]) == "--first";
+  if (first) {
+    --argc;
+    ++argv;
+  }
   if (argc < 4) {
     std::fprintf(stderr,
-                 "usage: radiosity-column SCENE.obj R COLUMNS [PATCH_SIZE [ELEMENTS_PER_PATCH [JOIN]]]\n");
+                 "usage: radiosity-column [--first] SCENE.obj R COLUMNS [PATCH_SIZE [ELEMENTS_PER_PATCH [JOIN]]]\n");
     return 2;
   }
   Scene scene;
@@ -45,20 +54,31 @@ int main(int argc, char** argv) {
   std::vector<FormFactor> col;
   const int n = int(mesh.patches.size());
   const int step = std::max(1, n / want);
+  std::vector<int> shooters;
+  if (first) {
+    Solver solver(mesh, true);
+    while (int(shooters.size()) < want) {
+      const int p = solver.Select();
+      if (p < 0) break;
+      ShotColumn(&hc, mesh, p, GroupOf(mesh, p), solver.TimesShot(p), true, 1, &col);
+      solver.Shoot(p, col);
+      shooters.push_back(p);
+    }
+  } else {
+    for (int p = 0; p < n && int(shooters.size()) < want; p += step) shooters.push_back(p);
+  }
   // One column first, untimed: buffers and any per-mesh setup are a
   // once-per-run cost, not a column's.
   ShotColumn(&hc, mesh, 0, GroupOf(mesh, 0), 0, true, 1, &col);
   // Twice over the same shooters: without stats for the time (the stage
   // clocks cost a little per face), then with them for the split, shown as
   // shares of that time (CPU time: the machine may be shared).
-  int columns = 0;
+  const int columns = int(shooters.size());
   const double t0 = ThreadCpuSeconds();
-  for (int p = 0; p < n && columns < want; p += step, ++columns)
-    ShotColumn(&hc, mesh, p, GroupOf(mesh, p), 0, true, 1, &col);
+  for (int p : shooters) ShotColumn(&hc, mesh, p, GroupOf(mesh, p), 0, true, 1, &col);
   const double per = (ThreadCpuSeconds() - t0) / columns;
   ColumnStats st;
-  for (int p = 0, c = 0; p < n && c < want; p += step, ++c)
-    ShotColumn(&hc, mesh, p, GroupOf(mesh, p), 0, true, 1, &col, &st);
+  for (int p : shooters) ShotColumn(&hc, mesh, p, GroupOf(mesh, p), 0, true, 1, &col, &st);
   const double staged = std::max(1e-12, st.transform_s + st.raster_s + st.readback_s);
   const double elems = double(mesh.elems.size());
   const double model =

@@ -11,14 +11,19 @@
 # BEFORE=REV (default 5298a27, the column before culling): REV's
 # hemicube.{h,cpp} (and hemicube_cache.cpp where REV has it) built with bench/column.cpp against this tree's other
 # objects into bench/results/tmp/ (a note instead if that no longer builds).
-# R: resolution (default 256); COLUMNS: shooters per scene (default 40).
+# R: resolution (default 256); COLUMNS: shooters per scene (default 40),
+# spread evenly over the patches, or with FIRST=1 the first COLUMNS a run
+# shoots (radiosity-column --first): the lights and large surfaces, which
+# see most of a big scene and cost more than the average shooter.
 # Scenes are generated once into bench/results/tmp/scenes/ (not in git).
 cd "$(dirname "$0")/.." || exit 1
 mode=${1:-full}
 res=${R:-256}
 n=${COLUMNS:-40}
 rev=${BEFORE:-5298a27}
-objs="build/clock.o build/scene.o build/surface.o build/mesh.o build/divide.o build/groups.o build/files.o build/memory.o"
+objs="build/clock.o build/scene.o build/surface.o build/mesh.o build/divide.o build/groups.o build/files.o build/memory.o build/solver.o build/shooters.o"
+first=
+[ -n "$FIRST" ] && first=--first
 for b in build/radiosity-column build/scenegen $objs; do
   [ -e "$b" ] || { echo "bench/column.sh: $b missing: run make build/radiosity-column build/scenegen" >&2; exit 1; }
 done
@@ -56,7 +61,9 @@ scene() {  # NAME: generated on first use
 
 list="boxes20 cornell1t boxes1000 cornell3t boxes10000 cornell24t"
 [ "$mode" = quick ] || list="$list boxes40000 cornell80t"
-echo "Form-factor column at scale (R = $res, ms per column, CPU time, mean over $n shooters; before: $rev)"
+which="$n shooters"
+[ -n "$first" ] && which="the first $n shooters of a run"
+echo "Form-factor column at scale (R = $res, ms per column, CPU time, mean over $which; before: $rev)"
 echo "| scene | elements | covered | model | before | before/model | before visited | after | after/model | after visited | transform | raster | readback |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 rows=$(mktemp)
@@ -67,11 +74,11 @@ for s in $list; do
   # coplanar triangles would make the plain box again.
   case $s in cornell*t) args="0 2 0" ;; *) args="" ;; esac
   # Fields: name R elements covered visited ms transform raster readback model ratio
-  # shellcheck disable=SC2086 # args
-  after=$(./build/radiosity-column "$f" "$res" "$n" $args) || exit 1
+  # shellcheck disable=SC2086 # first, args
+  after=$(./build/radiosity-column $first "$f" "$res" "$n" $args) || exit 1
   before="- | - | - | - | - | - | - | - | - | - | -"
-  # shellcheck disable=SC2086 # args
-  [ -x "$old/radiosity-column" ] && { before=$("$old/radiosity-column" "$f" "$res" "$n" $args) || exit 1; }
+  # shellcheck disable=SC2086 # first, args
+  [ -x "$old/radiosity-column" ] && { before=$("$old/radiosity-column" $first "$f" "$res" "$n" $args) || exit 1; }
   echo "$before|$after" | awk -F' [|] |[|]' -v s="$s" '
     { printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n",
         s, $14, $15, $21, $6, $11, $5, $17, $22, $16, $18, $19, $20 }'
