@@ -18,7 +18,7 @@ namespace {
 
 // Form factor <-> 24 bits: the float's bits (sign 0) >> 7, rounded to
 // nearest (ties away from zero); never 0 and never inf/NaN. Only for the
-// escape of a column's 12-bit codes (below).
+// escape of a column's 11-bit codes (below).
 constexpr uint32_t kFfMin = 1;           // 2^-142: the smallest code, a subnormal
 constexpr uint32_t kFfLimit = 0xff0000;  // exponent all ones: inf and NaN
 
@@ -38,23 +38,24 @@ float FfValue(uint32_t q) {
   return f;
 }
 
-// Form factor <-> 12 bits: code = e << 7 | m stands for
-// (1 + m / 128) 2^(e - 31), e in 0..31, m in 0..127. The code is the
-// float's (or double's) exponent and top 7 fraction bits with the
+// Form factor <-> 11 bits: code = e << 6 | m stands for
+// (1 + m / 64) 2^(e - 31), e in 0..31, m in 0..63. The code is the
+// float's (or double's) exponent and top 6 fraction bits with the
 // exponent rebased, so codes are in the order of their values and code + 1
 // is the next value. Code 0 (2^-31) is the escape instead: a 24-bit code
-// follows. A value has a 12-bit code exactly when its 24-bit code is
+// follows. A value has an 11-bit code exactly when its 24-bit code is
 // within those of code 1 and kCodeMax, so that each value has one coding.
-// Why 7 fraction bits: the hemicube's own error per element (it covers a
-// whole number of pixels) is far above a code step, 2^-7; with the
+// Why 6 fraction bits: the hemicube's own error per element (it covers a
+// whole number of pixels) is far above a code step, 2^-6; with the
 // rounding carried on (below) the answer moves far less than with the
 // hemicube's seed (README, "Bytes per form factor"), and the differences
-// of codes this coarse mostly fit in one byte (1.5 bytes a form factor at
-// most on the shipped scenes; with 8 bits the maze would take about 1.8,
-// from the share of its differences that two bytes would need).
-constexpr int kFractionBits = 7;
+// of codes this coarse mostly fit in one byte. With 7 bits (protocol 6)
+// 26% to 32% of the differences took two bytes at R 64, and the maze and
+// the room took 1.63 and 1.54 bytes a form factor there; with 6, 5% to
+// 11% do.
+constexpr int kFractionBits = 6;
 constexpr uint32_t kEscape = 0;
-constexpr uint32_t kCodeMax = (32u << kFractionBits) - 1;                 // 4095: 2 - 2^-7
+constexpr uint32_t kCodeMax = (32u << kFractionBits) - 1;                 // 2047: 2 - 2^-6
 constexpr uint32_t kFloatBias = 96u << 23;                                // 127 - 31, in a float's exponent field
 constexpr uint64_t kDoubleBias = uint64_t(1023 - 31) << kFractionBits;   // in the code's exponent field
 constexpr int kDoubleShift = 52 - kFractionBits;                          // a double's fraction bits not in the code
@@ -63,8 +64,8 @@ constexpr int kDoubleShift = 52 - kFractionBits;                          // a d
 // rebased.
 constexpr uint32_t CodeFloatBits(uint32_t code) { return (code << (23 - kFractionBits)) + kFloatBias; }
 
-// The 24-bit codes of the values of codes 1 (2^-31 (1 + 2^-7)) and
-// kCodeMax (2 - 2^-7): the range sent as 12-bit codes.
+// The 24-bit codes of the values of codes 1 (2^-31 (1 + 2^-6)) and
+// kCodeMax (2 - 2^-6): the range sent as 11-bit codes.
 constexpr uint32_t kLo24 = CodeFloatBits(1) >> 7;
 constexpr uint32_t kHi24 = CodeFloatBits(kCodeMax) >> 7;
 
@@ -91,16 +92,16 @@ uint32_t CodeRound(double x) {
 // one, -kShortBias <= d < kShortBias, is one byte d + kShortBias (below
 // kShortCodes); a long one two: kShortCodes + (v >> 8) and v & 0xff, with
 // v = kLongBias + d - kShortBias for d >= kShortBias and v = kLongBias + d
-// + kShortBias for d < -kShortBias (0 .. 8191 holds every difference of
+// + kShortBias for d < -kShortBias (0 .. 4095 holds every difference of
 // two codes), so that two bytes never stand for a short difference and
 // each column has one coding. The first bytes of all codes come first,
 // then the second bytes and the escapes: the decoder reads code i's first
 // byte at i, and no branch on its length. Neighbouring elements of a
-// patch have near form factors, so most differences are short: 86% of
-// them on the Cornell box, 72% on the maze (R 256).
-constexpr uint32_t kShortCodes = 224;
+// patch have near form factors, so most differences are short: 89% of
+// them on the maze at R 64, 95% on the room (radiosity-ffbytes).
+constexpr uint32_t kShortCodes = 240;
 constexpr int32_t kShortBias = kShortCodes / 2;
-constexpr int32_t kLongBias = 32 << kFractionBits;  // 4096
+constexpr int32_t kLongBias = 32 << kFractionBits;  // 2048
 static_assert((256 - kShortCodes) << 8 == 2 * kLongBias, "two bytes hold every difference of codes");
 
 #ifdef FFCODEC_SSSE3
@@ -111,6 +112,10 @@ static_assert((256 - kShortCodes) << 8 == 2 * kLongBias, "two bytes hold every d
 // a whole group's bytes are there; stops at a group with a code that is
 // not 1 .. kCodeMax (an escape, or bytes that are no column), which the
 // scalar loop then decodes. Returns where it stopped; *x and *last move on.
+// Within 8 bytes of the end it goes on too (below): the last long
+// differences of a column are spread over many groups (11% of them are
+// long on the maze at R 64), and stopping where fewer than 8 second bytes
+// were left gave the scalar loop a tenth of the maze's groups.
 // Decoding a column took 3.4 to 4.6 ns a form factor with the scalar loop
 // alone, 1.5 to 2.0 with this (radiosity-ffbytes, shipped scenes, R 256).
 
@@ -130,13 +135,23 @@ __attribute__((target("ssse3,popcnt"))) size_t DecodeEights(const uint8_t* p, si
   size_t x = *x_io;
   const __m128i zero = _mm_setzero_si128();
   __m128i last = _mm_set1_epi16(int16_t(*last_io));
-  for (; i + 8 <= n && x + 8 <= size; i += 8) {
+  for (; i + 8 <= n; i += 8) {
     const __m128i b0 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + i));
     const __m128i long8 = _mm_cmpgt_epi8(_mm_xor_si128(b0, _mm_set1_epi8(char(0x80))),
                                          _mm_set1_epi8(char((kShortCodes - 1) ^ 0x80)));
     const unsigned m = unsigned(_mm_movemask_epi8(long8)) & 0xff;
-    const __m128i b1 = _mm_shuffle_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + x)),
-                                        _mm_loadl_epi64(reinterpret_cast<const __m128i*>(kSpread[m].data())));
+    const unsigned longs = unsigned(_mm_popcnt_u32(m));
+    __m128i spread = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(kSpread[m].data()));
+    const uint8_t* second = p + x;
+    if (x + 8 > size) {
+      if (x + longs > size) break;  // truncated: the scalar loop says so
+      // Near the end the 8 bytes are loaded from size - 8 (size >= n >= 8)
+      // and the spread's indices moved on by as many (the zeros' high bit
+      // stays set): no load past the end.
+      second = p + size - 8;
+      spread = _mm_add_epi8(spread, _mm_set1_epi8(char(x + 8 - size)));
+    }
+    const __m128i b1 = _mm_shuffle_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(second)), spread);
     const __m128i w0 = _mm_unpacklo_epi8(b0, zero), w1 = _mm_unpacklo_epi8(b1, zero);
     const __m128i is_long = _mm_unpacklo_epi8(long8, long8);
     const __m128i d_short = _mm_sub_epi16(w0, _mm_set1_epi16(kShortBias));
@@ -156,18 +171,26 @@ __attribute__((target("ssse3,popcnt"))) size_t DecodeEights(const uint8_t* p, si
     if (_mm_movemask_epi8(ok) != 0xffff) break;
     last = _mm_shufflehi_epi16(c, 0xff);
     last = _mm_unpackhi_epi64(last, last);
-    x += unsigned(_mm_popcnt_u32(m));
-    // CodeFloatBits: code << 16 is the code in a 32-bit lane's top half.
-    static_assert(23 - kFractionBits == 16, "codes are the top halves of their floats' bits");
+    x += longs;
+    // CodeFloatBits: the code shifted by 23 - kFractionBits - 16 in its
+    // 16-bit lane (it fits), then as a 32-bit lane's top half.
+    static_assert((kCodeMax << (23 - kFractionBits - 16)) <= 0xffff, "codes fit in their floats' top halves");
+    const __m128i top = _mm_slli_epi16(c, 23 - kFractionBits - 16);
     const __m128i bias = _mm_set1_epi32(int32_t(kFloatBias));
-    const __m128i flo = _mm_add_epi32(_mm_unpacklo_epi16(zero, c), bias);
-    const __m128i fhi = _mm_add_epi32(_mm_unpackhi_epi16(zero, c), bias);
+    const __m128i flo = _mm_add_epi32(_mm_unpacklo_epi16(zero, top), bias);
+    const __m128i fhi = _mm_add_epi32(_mm_unpackhi_epi16(zero, top), bias);
     const __m128i ids = _mm_set1_epi64x(0xffffffff);
     __m128i* const o = reinterpret_cast<__m128i*>(ff + i);
-    const __m128i f[4] = {_mm_unpacklo_epi32(zero, flo), _mm_unpackhi_epi32(zero, flo),
-                          _mm_unpacklo_epi32(zero, fhi), _mm_unpackhi_epi32(zero, fhi)};
-    for (int k = 0; k < 4; ++k)
-      _mm_storeu_si128(o + k, _mm_or_si128(_mm_and_si128(_mm_loadu_si128(o + k), ids), f[k]));
+    // Each store from its register: as an array and a loop, GCC built the
+    // four on the stack and copied them from there (decoding 1.3 ns a
+    // form factor on the blender room then took 1.6 to 1.9).
+    auto put = [&](int k, __m128i f) {
+      _mm_storeu_si128(o + k, _mm_or_si128(_mm_and_si128(_mm_loadu_si128(o + k), ids), f));
+    };
+    put(0, _mm_unpacklo_epi32(zero, flo));
+    put(1, _mm_unpackhi_epi32(zero, flo));
+    put(2, _mm_unpacklo_epi32(zero, fhi));
+    put(3, _mm_unpackhi_epi32(zero, fhi));
   }
   *x_io = x;
   *last_io = uint32_t(uint16_t(_mm_cvtsi128_si32(last)));
@@ -198,7 +221,7 @@ inline void PutIds(FormFactor* out, uint32_t id) {
 // sum by the last residual only. The form factors are visited from the
 // largest exponent down (in id order within one exponent), so that what
 // is left at the end is a rounding step of the smallest ones: |sum F' -
-// sum F| is at most 2^-7 of the largest form factor, and in practice far
+// sum F| is at most 2^-6 of the largest form factor, and in practice far
 // less (doc/protocol.txt). Escaped values are coded alone; their (tiny)
 // error is carried too. The residual is exact enough in double. The
 // visiting order and the codes are kept in the thread's scratch, reused
@@ -247,7 +270,7 @@ void PutFormFactors(const std::vector<FormFactor>& ff, std::string* out) {
     order[first[255 - (bits >> 23)]++] = uint32_t(i);
   }
 
-  // The codes, by id: 12 bits, or kEscaped | the 24-bit code.
+  // The codes, by id: 11 bits, or kEscaped | the 24-bit code.
   constexpr uint32_t kEscaped = 1u << 31;
   double carry = 0;
   for (uint32_t i : order) {
@@ -425,11 +448,11 @@ bool GetFormFactors(Reader* r, std::vector<FormFactor>* out_ff) {
       std::memcpy(&ff[i].f, &bits, 4);
       continue;
     }
-    if (code != kEscape)  // differences of two bytes below -4095 or above 4095 too
+    if (code != kEscape)  // differences of two bytes below -2047 or above 2047 too
       return r->Fail("form factor " + std::to_string(i) + " at offset " + at(p + i) + ": code " +
                      std::to_string(int32_t(code)) + " is out of range (1 .. " +
                      std::to_string(kCodeMax) + ")");
-    // The escape: a 24-bit code outside the 12-bit codes' range.
+    // The escape: a 24-bit code outside the 11-bit codes' range.
     if (x > size || size - x < 3)
       return r->Fail("truncated: escaped form factor " + std::to_string(i) +
                      " needs 3 bytes at offset " + at(p + std::min(x, size)) + ", " +
@@ -439,7 +462,7 @@ bool GetFormFactors(Reader* r, std::vector<FormFactor>* out_ff) {
     if (q >= kFfLimit) return r->Fail("form factor " + std::to_string(i) + " is inf or NaN");
     if (CodeRange(q))
       return r->Fail("form factor " + std::to_string(i) + " at offset " + at(p + x) +
-                     " is escaped but has a 12-bit code");
+                     " is escaped but has an 11-bit code");
     ff[i].f = FfValue(q);
     x += 3;
     }

@@ -16,7 +16,7 @@ constexpr char kRadiosityVersion[] = RADIOSITY_VERSION;
 namespace proto {
 
 // Bumped whenever a frame's layout or meaning changes.
-constexpr uint16_t kVersion = 6;
+constexpr uint16_t kVersion = 7;
 
 // This build's identity, sent in Hello: version, protocol and the
 // compiler, so that master and workers build identical meshes. At most

@@ -7,7 +7,7 @@
 // The columns are the run's own (Select, ShotColumn, Shoot: -j 0's order,
 // no subdivision), each encoded as the worker encodes it (EncodeColumn: a
 // frame). Candidates:
-//   now         the frame as sent (protocol 6: element ids as runs, 12-bit
+//   now         the frame as sent (protocol 7: element ids as runs, 11-bit
 //               codes as differences of 1 or 2 bytes)
 //   16-bit codes  the frame of protocol 5 (the same runs, 16-bit codes of
 //               2 bytes, 5 escaped): its size only, exact (it does not
@@ -20,7 +20,7 @@
 //               static table: no coder, no times)
 //   deltas H0   likewise for each code's difference from the one before it
 //               in the column (a bound for a coder of differences, against
-//               now's bytes for them); and for codes with 6 fraction bits
+//               now's bytes for them); and for codes with 5 fraction bits
 //               instead of 7 (what coarser codes would leave to send)
 // Times are the quickest of 3 passes over all columns, per form factor,
 // on the thread's CPU clock; decoding includes DecodeColumn after the
@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
   row("now", now_bytes, now_enc, now_dec);
 
   // Protocol 5: 2 bytes a code and 5 an escape where now has 1 or 2 bytes
-  // a difference and 3 more an escape (SentCode: the 12-bit codes, -1 for
+  // a difference and 3 more an escape (SentCode: the 11-bit codes, -1 for
   // escaped form factors; diff_bytes: now's bytes for the differences of
   // the codes not escaped).
   double codes16 = 0, diff_bytes = 0, coded = 0;
@@ -122,7 +122,7 @@ int main(int argc, char** argv) {
     for (const FormFactor& ff : c.ff) {
       const long code = proto::SentCode(ff.f);
       const long d = (code < 0 ? 0 : code) - last;
-      const double b = d >= -112 && d < 112 ? 1 : 2;  // ffcodec.cpp, kShortBias
+      const double b = d >= -120 && d < 120 ? 1 : 2;  // ffcodec.cpp, kShortBias
       codes16 += 2;
       if (code < 0) continue;  // escaped: 3 more bytes both ways
       diff_bytes += b;
@@ -186,9 +186,9 @@ int main(int argc, char** argv) {
 
   // Entropy bounds: the frames less now's bytes for the differences (what
   // the runs, header and escapes take), plus the codes at their entropy;
-  // then the differences of coarser codes (the fraction cut to 6 of its 7
-  // bits: what one bit fewer would leave to code, at a rounding of 2^-7
-  // instead of 2^-8 a form factor, before error diffusion).
+  // then the differences of coarser codes (the fraction cut to 5 of its 6
+  // bits: what one bit fewer would leave to code, at a rounding of 2^-6
+  // instead of 2^-7 a form factor, before error diffusion).
   auto entropy = [&](int drop, bool delta) {
     std::map<long, long> counts;
     for (const proto::Column& c : columns) {
@@ -207,6 +207,6 @@ int main(int argc, char** argv) {
   const double rest = now_bytes - diff_bytes;
   row("codes H0", rest + coded * h_codes / 8, -1, -1);
   row("deltas H0", rest + coded * h_deltas / 8, -1, -1);
-  row("deltas H0, 6-bit fraction", rest + coded * entropy(1, true) / 8, -1, -1);
+  row("deltas H0, 5-bit fraction", rest + coded * entropy(1, true) / 8, -1, -1);
   return 0;
 }

@@ -1,7 +1,7 @@
 // The benchmarks' one way to record the columns a run shoots: its first
 // `shots` columns in the order `-j 0` shoots them (Select, ShotColumn,
 // Shoot, no subdivision), each as the frame a worker sends (EncodeColumn),
-// and shot as the master shoots it, from the decoded frame (12-bit codes);
+// and shot as the master shoots it, from the decoded frame (11-bit codes);
 // and a recorded frame decoded again. Both exit with "PROG: why" on
 // stderr if a frame does not decode.
 #ifndef RADIOSITY_BENCH_RECORD_H

@@ -176,7 +176,7 @@ TEST(Protocol, HelloRoundTrips) {
     std::string frame;
     proto::EncodeHello(h, &frame);
     const std::string p = PayloadOf(frame, Msg::kHello);
-    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x06\x00", 6));  // magic, version
+    EXPECT_EQ(p.substr(0, 6), std::string("RADW\x07\x00", 6));  // magic, version
     proto::Hello d;
     d.magic = 0;
     d.version = 0;
@@ -187,7 +187,7 @@ TEST(Protocol, HelloRoundTrips) {
     EXPECT_EQ(d.build, b);
   }
   // A build string longer than 256 bytes or not printable is refused.
-  std::string p = "RADW" + std::string("\x06\x00", 2);
+  std::string p = "RADW" + std::string("\x07\x00", 2);
   std::string long_build = p;
   WVar(&long_build, 257);
   long_build += std::string(257, 'x');
@@ -205,8 +205,8 @@ TEST(Protocol, HelloOfAnotherVersionStillShowsItsVersion) {
   // Magic and version never move, so a mismatch is reported as such even
   // when the rest is laid out differently.
   proto::Hello h;
-  h.version = 7;
-  h.build = "radiosity 9.9 proto 7";
+  h.version = 8;
+  h.build = "radiosity 9.9 proto 8";
   std::string frame;
   proto::EncodeHello(h, &frame);
   std::string p = PayloadOf(frame, Msg::kHello) + "future fields";
@@ -214,7 +214,7 @@ TEST(Protocol, HelloOfAnotherVersionStillShowsItsVersion) {
   std::string err;
   ASSERT_TRUE(proto::DecodeHello(p, &d, &err)) << err;
   EXPECT_EQ(d.magic, proto::kMagic);
-  EXPECT_EQ(d.version, 7);
+  EXPECT_EQ(d.version, 8);
   EXPECT_EQ(d.build, h.build);
   // Not ours at all: magic and version come back, the build is empty.
   ASSERT_TRUE(proto::DecodeHello("HTTP/1.1 200 OK\r\n", &d, &err)) << err;

@@ -10,7 +10,7 @@ namespace {
 TEST(Version, BuildIdNamesVersionProtocolAndCompiler) {
   const std::string id = proto::BuildId();
   EXPECT_EQ(id.rfind("radiosity ", 0), 0u) << id;
-  EXPECT_NE(id.find(" proto 6 "), std::string::npos) << id;
+  EXPECT_NE(id.find(" proto 7 "), std::string::npos) << id;
   EXPECT_NE(id.find(__VERSION__), std::string::npos) << id;
   EXPECT_NE(id.find("64-bit le"), std::string::npos) << id;  // what this test runs on
   EXPECT_LE(id.size(), 256u);
