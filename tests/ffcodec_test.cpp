@@ -73,6 +73,13 @@ std::string CodeBytes(const std::vector<uint64_t>& codes) {
   return first + rest;
 }
 
+// A run as the document lays it out: gap << 3 | min(length - 1, 7), then
+// length - 8 when that is 7.
+void WRun(std::string* p, uint64_t gap, uint64_t len1) {
+  WVar(p, gap << 3 | std::min<uint64_t>(len1, 7));
+  if (len1 >= 7) WVar(p, len1 - 7);
+}
+
 // A column payload as the document lays it out, without any validation:
 // patch, k, compute_s, wait_s, n, runs (gap, length - 1), form factors.
 std::string RawColumn(uint64_t n, const std::vector<std::pair<uint64_t, uint64_t>>& runs,
@@ -85,10 +92,7 @@ std::string RawColumn(uint64_t n, const std::vector<std::pair<uint64_t, uint64_t
   WF64(&p, wait);
   WVar(&p, n);
   WVar(&p, runs.size());
-  for (const auto& r : runs) {
-    WVar(&p, r.first);
-    WVar(&p, r.second);
-  }
+  for (const auto& r : runs) WRun(&p, r.first, r.second);
   return p + CodeBytes(codes);
 }
 
@@ -378,10 +382,7 @@ TEST(FfCodec, ColumnIdsAreMaximalRuns) {
   }
   std::string run_bytes;
   WVar(&run_bytes, mixed_runs.size());
-  for (const auto& r : mixed_runs) {
-    WVar(&run_bytes, r.first);
-    WVar(&run_bytes, r.second);
-  }
+  for (const auto& r : mixed_runs) WRun(&run_bytes, r.first, r.second);
   std::printf("[          ] %zu ids in %zu runs: %zu bytes (%.3f per id)\n", mixed.size(),
               mixed_runs.size(), run_bytes.size(), double(run_bytes.size()) / double(mixed.size()));
 }
@@ -501,7 +502,7 @@ TEST(FfCodec, ABadRunAfterGoodOnesGetsItsOwnOneLineError) {
   // 200 good runs of one id (ids 0, 2, ..., 398: the decoder's quick
   // loop), then a bad one: the message its own check gives, exactly.
   // Payload: patch, k (1 byte each), two f64, n and the run count (2
-  // bytes each: 201), then 2 bytes a run: run 200 is at offset 422.
+  // bytes each: 201), then 1 byte a run: run 200 is at offset 222.
   auto column = [](uint64_t gap, uint64_t len1) {
     std::vector<std::pair<uint64_t, uint64_t>> runs(200, {1, 0});
     runs[0].first = 0;
@@ -519,17 +520,22 @@ TEST(FfCodec, ABadRunAfterGoodOnesGetsItsOwnOneLineError) {
     return err;
   };
   EXPECT_EQ(why(column(0, 0)),
-            "run 200 at offset 422 has gap 0: it continues the previous run (runs must be maximal)");
-  EXPECT_EQ(why(column(1, 1)), "run 200 at offset 422 makes 202 ids, more than the 201 form factors");
+            "run 200 at offset 222 has gap 0: it continues the previous run (runs must be maximal)");
+  EXPECT_EQ(why(column(1, 1)), "run 200 at offset 222 makes 202 ids, more than the 201 form factors");
   EXPECT_EQ(why(column(uint64_t(INT32_MAX) - 398, 0)),
-            "run 200 at offset 422: element id 2147483648 is out of range (max 2147483647)");
+            "run 200 at offset 222: element id 2147483648 is out of range (max 2147483647)");
   EXPECT_EQ(why(column(uint64_t(INT32_MAX) + 1, 0)),
             "run gap 2147483648 is out of range (max 2147483647)");
   EXPECT_EQ(why(column(1, uint64_t(INT32_MAX) + 1)),
             "run length - 1 2147483648 is out of range (max 2147483647)");
   const std::string good = column(1, 0);
-  EXPECT_EQ(why(good.substr(0, 422) + std::string("\x81\x00", 2) + good.substr(423)),
-            "varint run gap at offset 422 is not in its shortest form");
+  EXPECT_EQ(why(good.substr(0, 222) + std::string("\x88\x00", 2) + good.substr(223)),
+            "varint run gap and length at offset 222 is not in its shortest form");
+  // A length of 8 or more: its rest in a varint of its own.
+  const std::string longer = column(1, 7);  // ids 400 .. 407 for 208 form factors: too many
+  EXPECT_EQ(why(longer), "run 200 at offset 222 makes 208 ids, more than the 201 form factors");
+  EXPECT_EQ(why(longer.substr(0, 223) + std::string("\x80\x00", 2) + longer.substr(224)),
+            "varint run length - 8 at offset 223 is not in its shortest form");
 }
 
 TEST(FfCodec, ColumnMutationsGiveCleanErrorsOrCanonicalColumns) {
@@ -620,14 +626,14 @@ TEST(FfCodec, ColumnFrameIsTheDocumentedExample) {
   std::string frame;
   proto::EncodeColumn(c, &frame);
   EXPECT_EQ(Hex(frame),
-            "2200000005000000"  // header: 34 payload bytes, type 5 (column)
+            "2000000005000000"  // header: 32 payload bytes, type 5 (column)
             "0301"              // patch 3, k 1
             "000000000000d03f"  // compute_s 0.25
             "000000000000e03f"  // wait_s 0.5
             "04"                // 4 form factors
             "02"                // in 2 runs:
-            "0502"              //   ids 5, 6, 7: gap 5 from 0, length 3
-            "a40200"            //   id 300: gap 292 (a4 02) from 8, length 1
+            "2a"                //   ids 5, 6, 7: gap 5 from 0, length 3: 5 << 3 | 2
+            "a012"              //   id 300: gap 292 from 8, length 1: 292 << 3 | 0 = 2336
             "fe"                // 0.25 = 2^-2: e 29, m 0, code 0x740 = 0 + 1856: long,
                                 //   v = 2048 + 1856 - 120 = 0xec8, first byte 240 + 0xe
             "85"                // 0.3f ~ 1.2 2^-2: m 12.8 -> 13, code 0x74d = 0x740 + 13
