@@ -68,7 +68,8 @@ class Hemicube {
   // Frees the copy of the mesh the columns read (the cache, about 42
   // bytes an element) now, not at the next Column's rebuild: for a mesh
   // that has just changed, so that what comes before that column (a
-  // wave's picture) does not stand beside a copy rebuilt anyway.
+  // wave's picture) does not stand beside a copy rebuilt anyway. The
+  // hierarchy over faces stays, for the rebuild to keep (BuildCache).
   void ReleaseCache();
 
   // Culling on (the default): faces are visited front to back through a
@@ -82,6 +83,10 @@ class Hemicube {
   void set_culling(bool on) { culling_ = on; }
 
   static constexpr int kMaxResolution = 4096;
+
+  // How many times the hierarchy over faces was built (not kept from the
+  // mesh before a division: BuildCache).
+  long HierarchyBuilds() const { return hierarchy_builds_; }
 
  private:
   // The mesh as the column reads it, rebuilt when the mesh changes (built,
@@ -176,6 +181,7 @@ class Hemicube {
   int rows_[5][2] = {{INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}};
 
   Key key_;
+  long hierarchy_builds_ = 0;
   // Faces with leaves in the hierarchy's order, and their outlines in that
   // order: a column reads them front to back, nearly in memory order. The
   // vertices are the mesh's own (a face's are contiguous there but for

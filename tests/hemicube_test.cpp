@@ -214,6 +214,53 @@ TEST(Hemicube, CullingGivesThePlainZBuffersColumns) {
   }
 }
 
+// Divisions add leaves within faces, not faces: the cache rebuilt after
+// them (released first, as a worker's is) keeps the hierarchy over the
+// faces, and its columns are a fresh cache's, bit for bit.
+TEST(Hemicube, ADivisionKeepsTheHierarchy) {
+  for (const char* name : {"cornell", "maze"}) {
+    Mesh m = ShippedMesh(name);
+    Hemicube kept(128);
+    std::vector<FormFactor> a, b;
+    const int n = int(m.patches.size());
+    kept.Column(m, 0, GroupOf(m, 0), 0.0, &a);
+    EXPECT_EQ(kept.HierarchyBuilds(), 1);
+    for (int round = 0; round < 2; ++round) {
+      // Here and there, T-vertices included, and some of the new leaves again.
+      kept.ReleaseCache();
+      for (int e = round, n0 = int(m.elems.size()); e < n0; e += 7)
+        if (m.elems[e].IsLeaf()) Divide(&m, e);
+      for (int i = 0; i < 12; ++i) {
+        const int p = i * (n - 1) / 11;
+        Hemicube fresh(128);
+        kept.Column(m, p, GroupOf(m, p), 0.3, &a);
+        fresh.Column(m, p, GroupOf(m, p), 0.3, &b);
+        ASSERT_TRUE(SameColumn(a, b)) << name << " round " << round << " patch " << p;
+      }
+      EXPECT_EQ(kept.HierarchyBuilds(), 1) << name << " round " << round;
+    }
+  }
+  // Another mesh of as many faces: kept where its faces lie within the
+  // nodes' boxes (a box of half the size inside the first, which then
+  // gives a fresh cache's columns too), built again where they do not.
+  Hemicube h(128);
+  std::vector<FormFactor> a, b;
+  const Mesh unit = MakeMesh(Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)}));
+  const Mesh half = MakeMesh(Box(0.5, {glm::dvec3(0.5)}, {glm::dvec3(1.0)}));
+  const Mesh twice = MakeMesh(Box(2.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)}));
+  h.Column(unit, 5, GroupOf(unit, 5), 0.0, &a);
+  EXPECT_EQ(h.HierarchyBuilds(), 1);
+  for (int p : {0, 5, 9}) {
+    Hemicube fresh(128);
+    h.Column(half, p, GroupOf(half, p), 0.0, &a);
+    fresh.Column(half, p, GroupOf(half, p), 0.0, &b);
+    EXPECT_TRUE(SameColumn(a, b)) << "patch " << p;
+  }
+  EXPECT_EQ(h.HierarchyBuilds(), 1);
+  h.Column(twice, 5, GroupOf(twice, 5), 0.0, &a);
+  EXPECT_EQ(h.HierarchyBuilds(), 2);
+}
+
 // Quad a b c d (counter-clockwise seen from its front) cut k x k and each
 // cell into two triangles, every one a face of its own (as scenegen
 // tessellate --tri makes them, meshed without joining).
