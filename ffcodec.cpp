@@ -377,6 +377,15 @@ bool GetFormFactors(Reader* r, std::vector<FormFactor>* out_ff) {
   // Runs: gap << 3 | min(length - 1, 7), and length - 8 when that is 7;
   // checked, and their ids written.
   const uint8_t* p = base + r->pos();
+  // A varint at p, p past it; else false, with the Reader's own message
+  // for it at its offset.
+  auto varint = [&](uint64_t* v, const char* what) {
+    const uint8_t* const at = p;
+    if (GetVarint(&p, end, v) == VarintStatus::kOk) return true;
+    r->Seek(size_t(at - base));
+    r->Varint(UINT64_MAX, v, what);  // fails, and says why
+    return false;
+  };
   uint64_t next = 0;  // one past the previous run's last id
   uint64_t filled = 0;
   for (uint64_t k = 0; k < runs; ++k) {
@@ -406,24 +415,15 @@ bool GetFormFactors(Reader* r, std::vector<FormFactor>* out_ff) {
     }
     if (!quick) {
       uint64_t head;
-      if (GetVarint(&p, end, &head) != VarintStatus::kOk) {
-        r->Seek(size_t(gap_at - base));
-        r->Varint(UINT64_MAX, &head, "run gap and length");  // fails, and says why
-        return false;
-      }
+      if (!varint(&head, "run gap and length")) return false;
       gap = head >> kRunLenBits;
       len1 = head & kRunLenMore;
       if (gap > INT32_MAX)
         return r->Fail("run gap " + std::to_string(gap) + " is out of range (max " +
                        std::to_string(INT32_MAX) + ")");
       if (len1 == kRunLenMore) {
-        const uint8_t* const len_at = p;
         uint64_t more;
-        if (GetVarint(&p, end, &more) != VarintStatus::kOk) {
-          r->Seek(size_t(len_at - base));
-          r->Varint(UINT64_MAX, &more, "run length - 8");
-          return false;
-        }
+        if (!varint(&more, "run length - 8")) return false;
         if (more > INT32_MAX - kRunLenMore)
           return r->Fail("run length - 1 " + std::to_string(more + kRunLenMore) +
                          " is out of range (max " + std::to_string(INT32_MAX) + ")");
