@@ -121,31 +121,114 @@ uint64_t CellKey(const glm::ivec3& c) {
 }  // namespace
 
 // near_ for the patches from `from` on (the built ones, then the pieces
-// splits made): the top elements of every face in a grid of cells
-// split_near × the median width of those patches across, sorted by cell;
-// each splittable patch looks in the cells its radius reaches (or at
-// every element, when those cells would be more).
+// splits made): whether another face's top element lies within a radius
+// of split_near × its width, in front of it and facing back. Both ways
+// below test the same pairs' closeness the same way: the same answer.
 void Subdivider::FindNear(const Mesh& mesh, size_t from) {
   const size_t n = mesh.patches.size();
   near_.resize(n, 0);
   if (!(opts_.split_near > 0) || from >= n) return;
-  std::vector<double> widths;
+  std::vector<Searcher> searchers;
   for (size_t p = from; p < n; ++p)
-    if (Splittable(mesh, int(p), &tops_)) widths.push_back(std::sqrt(mesh.patch_area[p]));
-  if (widths.empty()) return;
-  std::nth_element(widths.begin(), widths.begin() + long(widths.size() / 2), widths.end());
-  const double cell = opts_.split_near * widths[widths.size() / 2];
+    if (Splittable(mesh, int(p), &tops_)) {
+      const MeshFace& face = mesh.faces[size_t(mesh.patches[p].face)];
+      searchers.push_back({mesh.patch_center[p], face.normal, opts_.split_near * std::sqrt(mesh.patch_area[p]),
+                           mesh.patches[p].face, int32_t(p)});
+    }
+  if (searchers.empty()) return;
+  size_t count = 0;
+  for (size_t p = 0; p < mesh.patches.size(); ++p) count += mesh.Tops(int(p)).size();
+  if (searchers.size() * kStreamBelow < count) StreamNear(mesh, searchers);
+  else GridNear(mesh, searchers, count);
+}
+
+namespace {
+
+// The closeness FindNear asks for: a top element of a face with `normal`
+// against a searcher, `d` from the searcher's centre to its centroid.
+bool Close(const glm::dvec3& d, const glm::dvec3& normal, const Subdivider::Searcher& s) {
+  return glm::dot(d, s.normal) > 0 && glm::dot(normal, d) < 0 && glm::dot(d, d) < s.r * s.r;
+}
+
+// The box a searcher's cells must cover: a little more than its radius,
+// so that whatever Close accepts lies within, rounding or not.
+glm::dvec3 Reach(const Subdivider::Searcher& s) { return glm::dvec3(s.r * (1 + 1e-6)); }
+
+}  // namespace
+
+// Few searchers: every top element streamed past them once, its centroid's
+// cell (2 × the greatest reach wide: a searcher reaches at most 2 × 2 × 2
+// of them) looked up among the cells theirs reach.
+void Subdivider::StreamNear(const Mesh& mesh, const std::vector<Searcher>& searchers) {
+  double r = 0;
+  glm::dvec3 lo(HUGE_VAL), hi(-HUGE_VAL);  // what any radius reaches
+  for (const Searcher& s : searchers) {
+    r = std::max(r, Reach(s).x);
+    lo = glm::min(lo, s.c0 - Reach(s));
+    hi = glm::max(hi, s.c0 + Reach(s));
+  }
+  const double cell = 2 * r;
+  if (!(cell > 0)) return;
+  auto cell_of = [&](const glm::dvec3& x) { return CellKey(glm::ivec3(glm::floor((x - lo) / cell))); };
+  std::vector<std::pair<uint64_t, int32_t>> reach;  // (cell, searcher), by cell
+  for (size_t i = 0; i < searchers.size(); ++i) {
+    const Searcher& s = searchers[i];
+    const glm::ivec3 a = glm::floor((s.c0 - Reach(s) - lo) / cell);
+    const glm::ivec3 b = glm::floor((s.c0 + Reach(s) - lo) / cell);
+    for (int x = a.x; x <= b.x; ++x)
+      for (int y = a.y; y <= b.y; ++y)
+        for (int z = a.z; z <= b.z; ++z) reach.emplace_back(CellKey({x, y, z}), int32_t(i));
+  }
+  std::sort(reach.begin(), reach.end());
+  // A bit per hash of a cell reached: most top elements are in none, and
+  // one test of 8 KB that stays in the first-level cache passes them by.
+  constexpr uint64_t kBits = 1 << 16;
+  auto bit = [](uint64_t key) { return (key * 0x9E3779B97F4A7C15ull) >> 48; };
+  std::vector<uint64_t> reached(kBits / 64, 0);
+  for (const auto& c : reach) reached[bit(c.first) / 64] |= uint64_t(1) << (bit(c.first) % 64);
+  std::vector<uint8_t> found(searchers.size(), 0);
+  size_t left = searchers.size();
+  for (size_t p = 0; p < mesh.patches.size() && left > 0; ++p) {
+    const int face = mesh.patches[p].face;
+    const glm::dvec3& normal = mesh.faces[size_t(face)].normal;
+    for (int e : mesh.Tops(int(p))) {
+      const glm::dvec3 c = mesh.Centroid(e);
+      if (glm::any(glm::lessThan(c, lo)) || glm::any(glm::greaterThan(c, hi))) continue;
+      const uint64_t key = cell_of(c);
+      if (!(reached[bit(key) / 64] >> (bit(key) % 64) & 1)) continue;
+      auto it = std::lower_bound(reach.begin(), reach.end(), std::make_pair(key, int32_t(-1)));
+      for (; it != reach.end() && it->first == key; ++it) {
+        const Searcher& s = searchers[size_t(it->second)];
+        if (found[size_t(it->second)] || s.face == face || !Close(c - s.c0, normal, s)) continue;
+        found[size_t(it->second)] = 1;
+        --left;
+      }
+    }
+  }
+  for (size_t i = 0; i < searchers.size(); ++i) near_[size_t(searchers[i].patch)] = found[i];
+}
+
+// Many searchers (the first pass): the top elements of every face in a
+// grid of cells the searchers' median radius across, sorted by cell;
+// each searcher looks in the cells it reaches (or at every element, when
+// those cells would be more).
+void Subdivider::GridNear(const Mesh& mesh, const std::vector<Searcher>& searchers, size_t count) {
+  std::vector<double> radii;
+  for (const Searcher& s : searchers) radii.push_back(s.r);
+  std::nth_element(radii.begin(), radii.begin() + long(radii.size() / 2), radii.end());
+  const double cell = radii[radii.size() / 2];
   if (!(cell > 0)) return;
   // 16 bytes a top element, reserved to their count: the centroids (24
-  // bytes more) are computed again where a cell is searched, and grown by
-  // doubling the array stood at three times its size while it moved, the
-  // master's peak in a dividing run (the whole mesh's tops, every pass).
+  // bytes more) are computed again where a cell is searched (the face is
+  // where padding would be: the test that skips a searcher's own face
+  // reads no element and no patch), and grown by doubling the array
+  // stood at three times its size while it moved, the master's peak in a
+  // dividing run (the whole mesh's tops).
   struct Top {
     uint64_t key;
     int32_t e;
+    int32_t face;
   };
-  size_t count = 0;
-  for (size_t p = 0; p < mesh.patches.size(); ++p) count += mesh.Tops(int(p)).size();
   // The grid's origin below every centroid: the vertices' least corner (a
   // centroid is their mean), one pass over an array where the centroids
   // were a pass of scattered reads each (7-10 ms at 260,000 tops).
@@ -155,27 +238,18 @@ void Subdivider::FindNear(const Mesh& mesh, size_t from) {
   std::vector<Top> tops;
   tops.reserve(count);
   for (size_t p = 0; p < mesh.patches.size(); ++p)
-    for (int e : mesh.Tops(int(p))) tops.push_back({CellKey(cell_of(mesh.Centroid(e))), e});
+    for (int e : mesh.Tops(int(p))) tops.push_back({CellKey(cell_of(mesh.Centroid(e))), e, mesh.patches[p].face});
   // By cell only: the search asks whether a cell holds a close element,
   // not which, so the order within a cell does not matter. Linear (16
   // bytes a top more while it sorts) where std::sort took 26-35 ms at
   // 260,000 tops.
   RadixSort(&tops, [](const Top& t) { return t.key; });
-  for (size_t p = from; p < n; ++p) {
-    if (!Splittable(mesh, int(p), &tops_)) continue;
-    const Patch& patch = mesh.patches[p];
-    const glm::dvec3 c0 = mesh.patch_center[p], normal = mesh.faces[size_t(patch.face)].normal;
-    const double r = opts_.split_near * std::sqrt(mesh.patch_area[p]);
-    // Another face's top element, in front, facing back, within r.
+  auto before = [](const Top& t, uint64_t k) { return t.key < k; };
+  for (const Searcher& s : searchers) {
     auto close = [&](const Top& t) {
-      if (mesh.elems[size_t(t.e)].patch >= 0 &&
-          mesh.patches[size_t(mesh.elems[size_t(t.e)].patch)].face == patch.face)
-        return false;
-      const glm::dvec3 d = mesh.Centroid(t.e) - c0;
-      return glm::dot(d, normal) > 0 && glm::dot(mesh.FaceOf(t.e).normal, d) < 0 &&
-             glm::dot(d, d) < r * r;
+      return t.face != s.face && Close(mesh.Centroid(t.e) - s.c0, mesh.faces[size_t(t.face)].normal, s);
     };
-    const glm::ivec3 a = cell_of(c0 - glm::dvec3(r)), b = cell_of(c0 + glm::dvec3(r));
+    const glm::ivec3 a = cell_of(s.c0 - Reach(s)), b = cell_of(s.c0 + Reach(s));
     const glm::dvec3 span = glm::dvec3(b - a) + 1.0;
     bool found = false;
     if (span.x * span.y * span.z > double(tops.size())) {
@@ -187,12 +261,11 @@ void Subdivider::FindNear(const Mesh& mesh, size_t from) {
       for (int x = a.x; x <= b.x && !found; ++x)
         for (int y = a.y; y <= b.y && !found; ++y) {
           const uint64_t first = CellKey({x, y, a.z}), last = CellKey({x, y, b.z});
-          auto it = std::lower_bound(tops.begin(), tops.end(), first,
-                                     [](const Top& t, uint64_t k) { return t.key < k; });
+          auto it = std::lower_bound(tops.begin(), tops.end(), first, before);
           for (; it != tops.end() && it->key <= last && !found; ++it) found = close(*it);
         }
     }
-    near_[p] = found;
+    near_[size_t(s.patch)] = found;
   }
 }
 

@@ -287,6 +287,66 @@ TEST(Split, CloseReceiversSplitAPatch) {
   EXPECT_TRUE(far.SplitPass(m, d, false, shot).empty());
 }
 
+// Closeness, found in a grid of every top element (many patches to
+// search: the first pass) or by streaming the top elements past the
+// patches (a few: the pieces of the last splits), is what a search of
+// every top element for each patch finds, pass after pass of splits that
+// hand divided tops' places to their children.
+TEST(Split, CloseReceiversAreWhatEveryTopFinds) {
+  Scene scene;
+  std::string err;
+  std::vector<std::string> warnings;
+  ASSERT_TRUE(LoadScene(ShippedScenePath("room"), &scene, &err, &warnings)) << err;
+  MeshOptions o;
+  o.elements_per_patch = 3;  // 9 top elements a patch
+  Mesh m = MakeMesh(scene, o);
+  SubdivideOptions so;
+  so.split = true;
+  Subdivider sub(&m, so);
+  auto close_to = [&](int p) {
+    const glm::dvec3 c0 = m.patch_center[size_t(p)];
+    const int face = m.patches[size_t(p)].face;
+    const glm::dvec3 normal = m.faces[size_t(face)].normal;
+    const double r = so.split_near * std::sqrt(m.patch_area[size_t(p)]);
+    for (size_t q = 0; q < m.patches.size(); ++q)
+      for (int e : m.Tops(int(q))) {
+        if (m.patches[q].face == face) continue;
+        const glm::dvec3 d = m.Centroid(e) - c0;
+        if (glm::dot(d, normal) > 0 && glm::dot(m.FaceOf(e).normal, d) < 0 && glm::dot(d, d) < r * r)
+          return true;
+      }
+    return false;
+  };
+  size_t from = 0, gridded = 0, streamed = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    const std::vector<float> d(m.elems.size(), 1.0f);
+    const std::vector<int> shot(m.patches.size(), 0);
+    size_t tops = 0, searchers = 0;
+    for (size_t p = 0; p < m.patches.size(); ++p) tops += m.Tops(int(p)).size();
+    std::vector<int32_t> want;
+    for (size_t p = from; p < m.patches.size(); ++p) {
+      const glm::dvec3& ke = m.Emission(m.faces[size_t(m.patches[p].face)]);
+      if (!(ke == glm::dvec3(0) && SplitPieces(m, int(p)) > 1)) continue;
+      ++searchers;
+      if (close_to(int(p))) want.push_back(int32_t(p));
+    }
+    (searchers * Subdivider::kStreamBelow < tops ? streamed : gridded) += 1;
+    const std::vector<int32_t> got = sub.SplitPass(m, d, false, shot);
+    ASSERT_EQ(got, want) << "pass " << pass;
+    ASSERT_FALSE(got.empty()) << "pass " << pass;
+    from = m.patches.size();
+    // Each split's first new piece (one top element) divided: the next
+    // pass searches it, and its split gives the children its place.
+    for (int32_t p : got) {
+      const size_t first = m.patches.size();
+      SplitPatch(&m, p);
+      if (m.elems[size_t(m.Tops(int(first))[0])].IsLeaf()) Divide(&m, m.Tops(int(first))[0]);
+    }
+  }
+  EXPECT_EQ(gridded, 1u);
+  EXPECT_EQ(streamed, 1u);
+}
+
 // A split ends the wave only where the patch has already shot in it: a
 // patch that has not loses nothing (its unshot power goes to the pieces),
 // and a converged wave with only such splits is the last one.
