@@ -156,48 +156,99 @@ glm::dvec3 Reach(const Subdivider::Searcher& s) { return glm::dvec3(s.r * (1 + 1
 
 }  // namespace
 
-// Few searchers: every top element streamed past them once, its centroid's
-// cell (2 × the greatest reach wide: a searcher reaches at most 2 × 2 × 2
-// of them) looked up among the cells theirs reach.
+// Per patch, how far its top elements' centroids lie from its centre at
+// most (float, rounded up), for the patches made since the last call. A
+// patch split since keeps its value: it has one top element now, whose
+// centroid is its centre (SplitPatch), so any value bounds it.
+void Subdivider::Radii(const Mesh& mesh) {
+  for (size_t p = radius_.size(); p < mesh.patches.size(); ++p) {
+    double r = 0;
+    for (int e : mesh.Tops(int(p))) r = std::max(r, glm::distance(mesh.Centroid(e), mesh.patch_center[p]));
+    radius_.push_back(std::nextafter(float(r), HUGE_VALF));
+  }
+}
+
+// Few searchers: the top elements streamed past them, each patch's first
+// tested as a whole, its sphere (centre, radius) against the spheres of
+// the searchers whose boxes meet the same coarse cells (2 × the greatest
+// reach or patch radius wide: any box meets at most 2 × 2 × 2 of them);
+// then each top element of a patch that meets one, its centroid's fine
+// cell (2 × the greatest reach) among those the searchers' boxes meet.
+// A pass after the first searches the pieces of the last splits, tens or
+// hundreds at 10^6 elements: most patches are far from all of them, and
+// their top elements' centroids (scattered reads) are not computed.
 void Subdivider::StreamNear(const Mesh& mesh, const std::vector<Searcher>& searchers) {
-  double r = 0;
-  glm::dvec3 lo(HUGE_VAL), hi(-HUGE_VAL);  // what any radius reaches
+  Radii(mesh);
+  double reach = 0, radius = 0;
+  glm::dvec3 lo(HUGE_VAL);
   for (const Searcher& s : searchers) {
-    r = std::max(r, Reach(s).x);
+    reach = std::max(reach, Reach(s).x);
     lo = glm::min(lo, s.c0 - Reach(s));
-    hi = glm::max(hi, s.c0 + Reach(s));
   }
-  const double cell = 2 * r;
-  if (!(cell > 0)) return;
-  auto cell_of = [&](const glm::dvec3& x) { return CellKey(glm::ivec3(glm::floor((x - lo) / cell))); };
-  std::vector<std::pair<uint64_t, int32_t>> reach;  // (cell, searcher), by cell
-  for (size_t i = 0; i < searchers.size(); ++i) {
-    const Searcher& s = searchers[i];
-    const glm::ivec3 a = glm::floor((s.c0 - Reach(s) - lo) / cell);
-    const glm::ivec3 b = glm::floor((s.c0 + Reach(s) - lo) / cell);
-    for (int x = a.x; x <= b.x; ++x)
-      for (int y = a.y; y <= b.y; ++y)
-        for (int z = a.z; z <= b.z; ++z) reach.emplace_back(CellKey({x, y, z}), int32_t(i));
-  }
-  std::sort(reach.begin(), reach.end());
-  // A bit per hash of a cell reached: most top elements are in none, and
-  // one test of 8 KB that stays in the first-level cache passes them by.
+  // The boxes a little larger than the radii, rounding or not.
+  const double slack = 1e-9 * mesh.scene_diagonal;
+  for (float r : radius_) radius = std::max(radius, double(r));
+  radius = radius * (1 + 1e-6) + slack;
+  lo -= glm::dvec3(radius);
+  const double fine = 2 * reach, coarse = 2 * std::max(reach, radius);
+  if (!(fine > 0)) return;
+  // The key of each cell a box meets, from `lo` (below every box); by the
+  // cell's inverse, the same for every box: a monotone map, so whatever
+  // lies in two boxes lies in a cell of each.
+  const double per_fine = 1 / fine, per_coarse = 1 / coarse;
+  auto cells = [&](const glm::dvec3& a, const glm::dvec3& b, double per, auto&& f) {
+    const glm::ivec3 i = glm::floor((a - lo) * per), j = glm::floor((b - lo) * per);
+    for (int x = i.x; x <= j.x; ++x)
+      for (int y = i.y; y <= j.y; ++y)
+        for (int z = i.z; z <= j.z; ++z) f(CellKey({x, y, z}));
+  };
+  // A bit per hash of a cell reached: most of what is tested is in none,
+  // and one test of 8 KB that stays in the first-level cache passes it by.
   constexpr uint64_t kBits = 1 << 16;
   auto bit = [](uint64_t key) { return (key * 0x9E3779B97F4A7C15ull) >> 48; };
-  std::vector<uint64_t> reached(kBits / 64, 0);
-  for (const auto& c : reach) reached[bit(c.first) / 64] |= uint64_t(1) << (bit(c.first) % 64);
+  auto set = [&](std::vector<uint64_t>* bits, uint64_t key) { (*bits)[bit(key) / 64] |= uint64_t(1) << (bit(key) % 64); };
+  auto has = [&](const std::vector<uint64_t>& bits, uint64_t key) { return bits[bit(key) / 64] >> (bit(key) % 64) & 1; };
+  std::vector<uint64_t> near_coarse(kBits / 64, 0), near_fine(kBits / 64, 0);
+  // (cell, searcher), by cell, coarse and fine.
+  std::vector<std::pair<uint64_t, int32_t>> reached_coarse, reached;
+  for (size_t i = 0; i < searchers.size(); ++i) {
+    const Searcher& s = searchers[i];
+    cells(s.c0 - Reach(s), s.c0 + Reach(s), per_coarse, [&](uint64_t k) {
+      set(&near_coarse, k);
+      reached_coarse.emplace_back(k, int32_t(i));
+    });
+    cells(s.c0 - Reach(s), s.c0 + Reach(s), per_fine, [&](uint64_t k) {
+      set(&near_fine, k);
+      reached.emplace_back(k, int32_t(i));
+    });
+  }
+  std::sort(reached_coarse.begin(), reached_coarse.end());
+  std::sort(reached.begin(), reached.end());
   std::vector<uint8_t> found(searchers.size(), 0);
   size_t left = searchers.size();
   for (size_t p = 0; p < mesh.patches.size() && left > 0; ++p) {
+    const glm::dvec3& pc = mesh.patch_center[p];
+    const double r = double(radius_[p]) * (1 + 1e-6) + slack;
+    // Its sphere against the spheres of the searchers in its cells.
+    bool meets = false;
+    cells(pc - glm::dvec3(r), pc + glm::dvec3(r), per_coarse, [&](uint64_t k) {
+      if (meets || !has(near_coarse, k)) return;
+      auto it = std::lower_bound(reached_coarse.begin(), reached_coarse.end(), std::make_pair(k, int32_t(-1)));
+      for (; it != reached_coarse.end() && it->first == k && !meets; ++it) {
+        const Searcher& s = searchers[size_t(it->second)];
+        const double d = r + Reach(s).x;
+        meets = !found[size_t(it->second)] && glm::dot(pc - s.c0, pc - s.c0) <= d * d;
+      }
+    });
+    if (!meets) continue;
     const int face = mesh.patches[p].face;
     const glm::dvec3& normal = mesh.faces[size_t(face)].normal;
     for (int e : mesh.Tops(int(p))) {
       const glm::dvec3 c = mesh.Centroid(e);
-      if (glm::any(glm::lessThan(c, lo)) || glm::any(glm::greaterThan(c, hi))) continue;
-      const uint64_t key = cell_of(c);
-      if (!(reached[bit(key) / 64] >> (bit(key) % 64) & 1)) continue;
-      auto it = std::lower_bound(reach.begin(), reach.end(), std::make_pair(key, int32_t(-1)));
-      for (; it != reach.end() && it->first == key; ++it) {
+      const uint64_t key = CellKey(glm::ivec3(glm::floor((c - lo) * per_fine)));
+      if (!has(near_fine, key)) continue;
+      auto it = std::lower_bound(reached.begin(), reached.end(), std::make_pair(key, int32_t(-1)));
+      for (; it != reached.end() && it->first == key; ++it) {
         const Searcher& s = searchers[size_t(it->second)];
         if (found[size_t(it->second)] || s.face == face || !Close(c - s.c0, normal, s)) continue;
         found[size_t(it->second)] = 1;

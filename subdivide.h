@@ -234,6 +234,7 @@ class Subdivider {
   void Track(const Mesh& mesh);
   double PassBound(int pass, const glm::dvec3& ambient, double mean) const;
   void FindNear(const Mesh& mesh, size_t from);
+  void Radii(const Mesh& mesh);
   void StreamNear(const Mesh& mesh, const std::vector<Searcher>& searchers);
   void GridNear(const Mesh& mesh, const std::vector<Searcher>& searchers, size_t count);
   void Spread(const Mesh& mesh, const std::vector<float>& direct, size_t from);
@@ -263,6 +264,9 @@ class Subdivider {
   bool measured_ = false;
   double direct_mean_ = 0;         // the lit scene's mean D when measured
   std::vector<uint8_t> near_;
+  // StreamNear's per patch: how far its top elements lie from its centre
+  // at most (Radii).
+  std::vector<float> radius_;
   std::vector<int> tops_, leaves_; // SplitPass's scratch
   long splits_ = 0;
   long first_ = 0;

@@ -318,7 +318,7 @@ TEST(Split, CloseReceiversAreWhatEveryTopFinds) {
     return false;
   };
   size_t from = 0, gridded = 0, streamed = 0;
-  for (int pass = 0; pass < 2; ++pass) {
+  for (int pass = 0; pass < 3; ++pass) {
     const std::vector<float> d(m.elems.size(), 1.0f);
     const std::vector<int> shot(m.patches.size(), 0);
     size_t tops = 0, searchers = 0;
@@ -333,7 +333,9 @@ TEST(Split, CloseReceiversAreWhatEveryTopFinds) {
     (searchers * Subdivider::kStreamBelow < tops ? streamed : gridded) += 1;
     const std::vector<int32_t> got = sub.SplitPass(m, d, false, shot);
     ASSERT_EQ(got, want) << "pass " << pass;
-    ASSERT_FALSE(got.empty()) << "pass " << pass;
+    if (pass < 2) {
+      ASSERT_FALSE(got.empty()) << "pass " << pass;
+    }
     from = m.patches.size();
     // Each split's first new piece (one top element) divided: the next
     // pass searches it, and its split gives the children its place.
@@ -344,7 +346,7 @@ TEST(Split, CloseReceiversAreWhatEveryTopFinds) {
     }
   }
   EXPECT_EQ(gridded, 1u);
-  EXPECT_EQ(streamed, 1u);
+  EXPECT_EQ(streamed, 2u);
 }
 
 // A split ends the wave only where the patch has already shot in it: a
