@@ -229,15 +229,18 @@ void Subdivider::StreamNear(const Mesh& mesh, const std::vector<Searcher>& searc
   for (size_t p = 0; p < mesh.patches.size() && left > 0; ++p) {
     const glm::dvec3& pc = mesh.patch_center[p];
     const double r = double(radius_[p]) * (1 + 1e-6) + slack;
-    // Its sphere against the spheres of the searchers in its cells.
+    // Its sphere against the spheres of the searchers in its cells; a
+    // cell crowded with them (searchers far smaller than the largest
+    // patch) is taken as met, so that no patch tests more than a few.
+    constexpr int kSpheres = 8;
     bool meets = false;
     cells(pc - glm::dvec3(r), pc + glm::dvec3(r), per_coarse, [&](uint64_t k) {
       if (meets || !has(near_coarse, k)) return;
       auto it = std::lower_bound(reached_coarse.begin(), reached_coarse.end(), std::make_pair(k, int32_t(-1)));
-      for (; it != reached_coarse.end() && it->first == k && !meets; ++it) {
+      for (int tested = 0; it != reached_coarse.end() && it->first == k && !meets; ++it, ++tested) {
         const Searcher& s = searchers[size_t(it->second)];
         const double d = r + Reach(s).x;
-        meets = !found[size_t(it->second)] && glm::dot(pc - s.c0, pc - s.c0) <= d * d;
+        meets = tested == kSpheres || (!found[size_t(it->second)] && glm::dot(pc - s.c0, pc - s.c0) <= d * d);
       }
     });
     if (!meets) continue;
