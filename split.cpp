@@ -150,9 +150,36 @@ bool Close(const glm::dvec3& d, const glm::dvec3& normal, const Subdivider::Sear
   return glm::dot(d, s.normal) > 0 && glm::dot(normal, d) < 0 && glm::dot(d, d) < s.r * s.r;
 }
 
-// The box a searcher's cells must cover: a little more than its radius,
-// so that whatever Close accepts lies within, rounding or not.
-glm::dvec3 Reach(const Subdivider::Searcher& s) { return glm::dvec3(s.r * (1 + 1e-6)); }
+// The half-width of the box a searcher's cells must cover: a little more
+// than its radius, so that whatever Close accepts lies within, rounding
+// or not.
+double Reach(const Subdivider::Searcher& s) { return s.r * (1 + 1e-6); }
+
+// Searchers by the cells their boxes meet: (cell, searcher) pairs sorted
+// by cell, behind a bit per hash of a cell met, so that a cell none meets
+// (most of those looked up) is passed by with one test of 8 KB that stays
+// in the first-level cache.
+class CellIndex {
+ public:
+  using Pairs = std::vector<std::pair<uint64_t, int32_t>>;
+  void Add(uint64_t cell, int32_t searcher) {
+    bits_[Bit(cell) / 64] |= uint64_t(1) << (Bit(cell) % 64);
+    pairs_.emplace_back(cell, searcher);
+  }
+  void Sort() { std::sort(pairs_.begin(), pairs_.end()); }
+  // The searchers in `cell`, in id order.
+  std::pair<Pairs::const_iterator, Pairs::const_iterator> In(uint64_t cell) const {
+    if (!(bits_[Bit(cell) / 64] >> (Bit(cell) % 64) & 1)) return {pairs_.end(), pairs_.end()};
+    return std::equal_range(pairs_.begin(), pairs_.end(), std::make_pair(cell, int32_t(-1)),
+                            [](const auto& a, const auto& b) { return a.first < b.first; });
+  }
+
+ private:
+  static constexpr uint64_t kBits = 1 << 16;
+  static uint64_t Bit(uint64_t cell) { return (cell * 0x9E3779B97F4A7C15ull) >> 48; }
+  std::vector<uint64_t> bits_ = std::vector<uint64_t>(kBits / 64, 0);
+  Pairs pairs_;
+};
 
 }  // namespace
 
@@ -182,7 +209,7 @@ void Subdivider::StreamNear(const Mesh& mesh, const std::vector<Searcher>& searc
   double reach = 0, radius = 0;
   glm::dvec3 lo(HUGE_VAL);
   for (const Searcher& s : searchers) {
-    reach = std::max(reach, Reach(s).x);
+    reach = std::max(reach, Reach(s));
     lo = glm::min(lo, s.c0 - Reach(s));
   }
   // The boxes a little larger than the radii, rounding or not.
@@ -192,38 +219,26 @@ void Subdivider::StreamNear(const Mesh& mesh, const std::vector<Searcher>& searc
   lo -= glm::dvec3(radius);
   const double fine = 2 * reach, coarse = 2 * std::max(reach, radius);
   if (!(fine > 0)) return;
-  // The key of each cell a box meets, from `lo` (below every box); by the
-  // cell's inverse, the same for every box: a monotone map, so whatever
-  // lies in two boxes lies in a cell of each.
+  // A point's cell, from `lo` (below every box); by the cell's inverse,
+  // the same for every box: a monotone map, so whatever lies in two boxes
+  // lies in a cell of each.
   const double per_fine = 1 / fine, per_coarse = 1 / coarse;
-  auto cells = [&](const glm::dvec3& a, const glm::dvec3& b, double per, auto&& f) {
-    const glm::ivec3 i = glm::floor((a - lo) * per), j = glm::floor((b - lo) * per);
+  auto cell_of = [&](const glm::dvec3& x, double per) { return glm::ivec3(glm::floor((x - lo) * per)); };
+  // The key of each cell the box of half-width h around c meets.
+  auto cells = [&](const glm::dvec3& c, double h, double per, auto&& f) {
+    const glm::ivec3 i = cell_of(c - glm::dvec3(h), per), j = cell_of(c + glm::dvec3(h), per);
     for (int x = i.x; x <= j.x; ++x)
       for (int y = i.y; y <= j.y; ++y)
         for (int z = i.z; z <= j.z; ++z) f(CellKey({x, y, z}));
   };
-  // A bit per hash of a cell reached: most of what is tested is in none,
-  // and one test of 8 KB that stays in the first-level cache passes it by.
-  constexpr uint64_t kBits = 1 << 16;
-  auto bit = [](uint64_t key) { return (key * 0x9E3779B97F4A7C15ull) >> 48; };
-  auto set = [&](std::vector<uint64_t>* bits, uint64_t key) { (*bits)[bit(key) / 64] |= uint64_t(1) << (bit(key) % 64); };
-  auto has = [&](const std::vector<uint64_t>& bits, uint64_t key) { return bits[bit(key) / 64] >> (bit(key) % 64) & 1; };
-  std::vector<uint64_t> near_coarse(kBits / 64, 0), near_fine(kBits / 64, 0);
-  // (cell, searcher), by cell, coarse and fine.
-  std::vector<std::pair<uint64_t, int32_t>> reached_coarse, reached;
+  CellIndex near_coarse, near_fine;
   for (size_t i = 0; i < searchers.size(); ++i) {
     const Searcher& s = searchers[i];
-    cells(s.c0 - Reach(s), s.c0 + Reach(s), per_coarse, [&](uint64_t k) {
-      set(&near_coarse, k);
-      reached_coarse.emplace_back(k, int32_t(i));
-    });
-    cells(s.c0 - Reach(s), s.c0 + Reach(s), per_fine, [&](uint64_t k) {
-      set(&near_fine, k);
-      reached.emplace_back(k, int32_t(i));
-    });
+    cells(s.c0, Reach(s), per_coarse, [&](uint64_t k) { near_coarse.Add(k, int32_t(i)); });
+    cells(s.c0, Reach(s), per_fine, [&](uint64_t k) { near_fine.Add(k, int32_t(i)); });
   }
-  std::sort(reached_coarse.begin(), reached_coarse.end());
-  std::sort(reached.begin(), reached.end());
+  near_coarse.Sort();
+  near_fine.Sort();
   std::vector<uint8_t> found(searchers.size(), 0);
   size_t left = searchers.size();
   for (size_t p = 0; p < mesh.patches.size() && left > 0; ++p) {
@@ -234,12 +249,13 @@ void Subdivider::StreamNear(const Mesh& mesh, const std::vector<Searcher>& searc
     // patch) is taken as met, so that no patch tests more than a few.
     constexpr int kSpheres = 8;
     bool meets = false;
-    cells(pc - glm::dvec3(r), pc + glm::dvec3(r), per_coarse, [&](uint64_t k) {
-      if (meets || !has(near_coarse, k)) return;
-      auto it = std::lower_bound(reached_coarse.begin(), reached_coarse.end(), std::make_pair(k, int32_t(-1)));
-      for (int tested = 0; it != reached_coarse.end() && it->first == k && !meets; ++it, ++tested) {
+    cells(pc, r, per_coarse, [&](uint64_t k) {
+      if (meets) return;
+      const auto in = near_coarse.In(k);
+      int tested = 0;
+      for (auto it = in.first; it != in.second && !meets; ++it, ++tested) {
         const Searcher& s = searchers[size_t(it->second)];
-        const double d = r + Reach(s).x;
+        const double d = r + Reach(s);
         meets = tested == kSpheres || (!found[size_t(it->second)] && glm::dot(pc - s.c0, pc - s.c0) <= d * d);
       }
     });
@@ -248,10 +264,8 @@ void Subdivider::StreamNear(const Mesh& mesh, const std::vector<Searcher>& searc
     const glm::dvec3& normal = mesh.faces[size_t(face)].normal;
     for (int e : mesh.Tops(int(p))) {
       const glm::dvec3 c = mesh.Centroid(e);
-      const uint64_t key = CellKey(glm::ivec3(glm::floor((c - lo) * per_fine)));
-      if (!has(near_fine, key)) continue;
-      auto it = std::lower_bound(reached.begin(), reached.end(), std::make_pair(key, int32_t(-1)));
-      for (; it != reached.end() && it->first == key; ++it) {
+      const auto in = near_fine.In(CellKey(cell_of(c, per_fine)));
+      for (auto it = in.first; it != in.second; ++it) {
         const Searcher& s = searchers[size_t(it->second)];
         if (found[size_t(it->second)] || s.face == face || !Close(c - s.c0, normal, s)) continue;
         found[size_t(it->second)] = 1;
@@ -303,7 +317,7 @@ void Subdivider::GridNear(const Mesh& mesh, const std::vector<Searcher>& searche
     auto close = [&](const Top& t) {
       return t.face != s.face && Close(mesh.Centroid(t.e) - s.c0, mesh.faces[size_t(t.face)].normal, s);
     };
-    const glm::ivec3 a = cell_of(s.c0 - Reach(s)), b = cell_of(s.c0 + Reach(s));
+    const glm::ivec3 a = cell_of(s.c0 - glm::dvec3(Reach(s))), b = cell_of(s.c0 + glm::dvec3(Reach(s)));
     const glm::dvec3 span = glm::dvec3(b - a) + 1.0;
     bool found = false;
     if (span.x * span.y * span.z > double(tops.size())) {
