@@ -270,6 +270,11 @@ int WorkerPool::Starting() const {
 
 void WorkerPool::Assign(int w, const proto::Assignment& a) {
   Worker& wk = workers_[w];
+  // Lost before the master heard of it (later in the same batch of
+  // events, or on the pool's own thread, ThreadedPool): dropped, since
+  // the loss, once heard, gives every patch it owned, this one too, to
+  // the others.
+  if (wk.state == State::kLost) return;
   CHECK(wk.state == State::kJoined);
   if (wk.owed++ == 0) wk.progress = Clk();
   proto::EncodeWork({a}, &wk.out);

@@ -195,6 +195,29 @@ TEST_F(PoolTest, AHundredWorkersAreHeardAndALostOnesFdServesANewcomer) {
   EXPECT_EQ(ev[0].worker, 100);
 }
 
+// The master may assign to a worker the pool lost before the master
+// heard of it: while it handles an earlier event of the same Poll, or
+// with the pool on a thread of its own (ThreadedPool). The assignment is
+// dropped (the loss gives back all the worker owned) and the pool goes on.
+TEST_F(PoolTest, AnAssignmentToAWorkerLostBeforeTheMasterHeardIsDropped) {
+  Peer gone = Joined(), alive = Joined();
+  gone.Close();
+  EXPECT_TRUE(Has(LostWhy(), "closed the connection"));
+  pool_.Assign(0, {2, 0});
+  pool_.Assign(1, {3, 0});
+  std::vector<WorkerEvent> ev;
+  pool_.Poll(0, &ev);
+  EXPECT_TRUE(ev.empty());
+  Msg type;
+  std::string payload, err;
+  std::vector<proto::Assignment> work;
+  ASSERT_TRUE(alive.Next(&type, &payload));
+  ASSERT_EQ(type, Msg::kWork);
+  ASSERT_TRUE(proto::DecodeWork(payload, &work, &err)) << err;
+  ASSERT_EQ(work.size(), 1u);
+  EXPECT_EQ(work[0].patch, 3);
+}
+
 TEST_F(PoolTest, HelloDeadline) {
   Peer p = Connect();
   ReadSetup(&p);

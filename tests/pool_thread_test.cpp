@@ -164,6 +164,32 @@ TEST_F(ThreadedPoolTest, AWorkerThatClosesIsLost) {
   EXPECT_NE(ev[0].why.find("closed the connection"), std::string::npos) << ev[0].why;
 }
 
+// The master may assign to a worker the pool thread has lost before the
+// loss reaches it (tests/ssh.sh's kill -9 of a remote worker aborted the
+// master so, on WorkerPool::Assign's CHECK that the worker had joined,
+// in 1 run of 11 here): the order is dropped, the pool goes on.
+TEST_F(ThreadedPoolTest, AnAssignmentToAWorkerLostMeanwhileIsDropped) {
+  std::vector<Peer> peers = Start(2);
+  for (Peer& p : peers) Join(&p);
+  Next(2);
+  peers[0].Close();
+  std::vector<WorkerEvent> ev = Next();
+  ASSERT_EQ(ev[0].kind, WorkerEvent::kLost);
+  ASSERT_EQ(ev[0].worker, 0);
+  pool_->Assign(0, {2, 0});  // as a master that has not yet polled would
+  pool_->Assign(1, {3, 0});
+  ev.clear();
+  pool_->Send(&ev);
+  Msg type;
+  std::string payload, err;
+  std::vector<proto::Assignment> work;
+  ASSERT_TRUE(peers[1].Next(&type, &payload));
+  ASSERT_EQ(type, Msg::kWork);
+  ASSERT_TRUE(proto::DecodeWork(payload, &work, &err)) << err;
+  ASSERT_EQ(work.size(), 1u);
+  EXPECT_EQ(work[0].patch, 3);
+}
+
 // Columns' ids are checked against the mesh as this thread divided it,
 // the counts going with the Divide (the pool thread never reads the mesh
 // this thread changes): an id of a child is refused before, taken after.
