@@ -1,16 +1,15 @@
 #include "pool_thread.h"
 
 #include <chrono>
-#include <csignal>
 #include <cstdint>
 #include <utility>
 
-#include <pthread.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
 
 #include "check.h"
 #include "clock.h"
+#include "quiet_thread.h"
 
 namespace {
 
@@ -47,11 +46,7 @@ ThreadedPool::ThreadedPool(std::unique_ptr<WorkerPool> pool, const Mesh& mesh)
   std::vector<WorkerEvent> none;
   Publish(&none);
   seen_ = said_;
-  sigset_t all, old;
-  sigfillset(&all);
-  ::pthread_sigmask(SIG_BLOCK, &all, &old);  // inherited by the thread
-  thread_ = std::thread([this] { Loop(); });
-  ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
+  thread_ = QuietThread([this] { Loop(); });
 }
 
 ThreadedPool::~ThreadedPool() {

@@ -1,14 +1,12 @@
 #include "viewserver.h"
 
 #include <httplib.h>
-#include <pthread.h>
 #include <sys/socket.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <condition_variable>
-#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <deque>
@@ -18,6 +16,7 @@
 #include <thread>
 
 #include "clock.h"
+#include "quiet_thread.h"
 
 namespace {
 
@@ -241,15 +240,11 @@ bool ViewServer::Start(const std::string& host, int port, std::string* bound, st
   sh.server.RaiseBacklog();
   // The server's threads take no signals: SIGINT and the rest stop the
   // run through the main thread's handler, as without --view.
-  sigset_t all, old;
-  sigfillset(&all);
-  pthread_sigmask(SIG_BLOCK, &all, &old);
   sh.ended = sh.listened.get_future();
-  sh.listener = std::thread([&sh] {
+  sh.listener = QuietThread([&sh] {
     sh.server.listen_after_bind();
     sh.listened.set_value();
   });
-  pthread_sigmask(SIG_SETMASK, &old, nullptr);
   // stop() is a no-op until the server runs: wait for that (or its end).
   while (!sh.server.is_running() &&
          sh.ended.wait_for(std::chrono::milliseconds(1)) != std::future_status::ready) {

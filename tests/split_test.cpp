@@ -3,6 +3,8 @@
 // the edit on the wire and in checkpoints.
 #include <gtest/gtest.h>
 
+#include <thread>
+
 #include "checkpoint.h"
 #include "groups.h"
 #include "hemicube.h"
@@ -347,6 +349,48 @@ TEST(Split, CloseReceiversAreWhatEveryTopFinds) {
   }
   EXPECT_EQ(gridded, 1u);
   EXPECT_EQ(streamed, 2u);
+}
+
+// The closeness search made ahead of the first pass, on another thread
+// beside the edges' adjacency as the scheduler makes it (Subdivider::
+// Prepare), finds what the pass's own search finds; and one made ahead
+// of a later pass searches only the pieces the pass would.
+TEST(Split, ClosenessSearchedAheadIsWhatThePassFinds) {
+  Scene scene;
+  std::string err;
+  std::vector<std::string> warnings;
+  ASSERT_TRUE(LoadScene(ShippedScenePath("room"), &scene, &err, &warnings)) << err;
+  MeshOptions o;
+  o.elements_per_patch = 3;
+  Mesh plain = MakeMesh(scene, o), ahead = MakeMesh(scene, o);
+  SubdivideOptions so;
+  so.split = true;
+  Subdivider sub_plain(&plain, so), sub_ahead(&ahead, so);
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 0) {
+      std::thread t([&] {
+        ConnectEdges(&ahead);
+        sub_ahead.Prepare(ahead);
+      });
+      t.join();
+      EXPECT_TRUE(ahead.connected);
+    } else {
+      sub_ahead.Prepare(ahead);
+    }
+    const std::vector<float> d(plain.elems.size(), 1.0f);
+    const std::vector<int> shot(plain.patches.size(), 0);
+    const std::vector<int32_t> want = sub_plain.SplitPass(plain, d, false, shot);
+    ASSERT_FALSE(want.empty()) << "pass " << pass;
+    ASSERT_EQ(sub_ahead.SplitPass(ahead, d, false, shot), want) << "pass " << pass;
+    // As in the test above: each split's first piece divided, so that
+    // the next pass has close pieces to find.
+    for (int32_t p : want)
+      for (Mesh* m : {&plain, &ahead}) {
+        const size_t first = m->patches.size();
+        SplitPatch(m, p);
+        if (m->elems[size_t(m->Tops(int(first))[0])].IsLeaf()) Divide(m, m->Tops(int(first))[0]);
+      }
+  }
 }
 
 // A split ends the wave only where the patch has already shot in it: a
