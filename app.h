@@ -31,6 +31,9 @@
 #include "viewserver.h"
 #include "writers.h"
 
+class WorkerPool;
+struct Surface;
+
 // A message as the terminal may show it: names from the command line and
 // the scene can hold control characters and escape sequences, shown as \xNN.
 std::string Printable(const std::string& text);
@@ -52,9 +55,10 @@ class MasterRun {
   MasterRun& operator=(const MasterRun&) = delete;
   ~MasterRun();
 
-  // Loads the scene, the camera, the reference and the mesh; checks the
-  // checkpoint to resume and that the one to write can be; opens the
-  // output directory and log.csv; starts the workers.
+  // Loads the scene, the camera and the reference; starts the workers,
+  // which mesh the scene while the master does; checks the checkpoint to
+  // resume and that the one to write can be; opens the output directory
+  // and log.csv.
   void Build();
   // Solves until converged, stopped or out of shots or time.
   void Run();
@@ -64,6 +68,8 @@ class MasterRun {
  private:
   void CheckOutputs(const std::vector<Input>& ck_inputs);
   void StartWorkers();
+  void MeshScene(std::vector<Surface> surfaces);
+  void JoinWorkers();
   void Resume();
   void OnSample(const Sample& s);
   void Note(const std::string& line, bool warning);
@@ -118,6 +124,8 @@ class MasterRun {
   std::mutex progress_mu_;
   std::unique_ptr<Subdivider> subdivider_;
   long built_ = 0;  // elements as built, before dividing
+  std::unique_ptr<WorkerPool> starting_;  // StartWorkers' pool, until JoinWorkers
+  long local_workers_ = 0;                 // forked by StartWorkers
   std::unique_ptr<Transport> transport_;
   ThreadedPool* pool_thread_ = nullptr;  // transport_, when the pool has its thread
   long sub_limit_ = 0;  // elements subdivision may reach: kMaxElements, or what memory allows

@@ -153,15 +153,38 @@ std::unique_ptr<Conn> SocketConn(int fd) {
   return std::make_unique<LocalConn>(fd, -1);
 }
 
-WorkerPool::WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh,
-                       const PoolOptions& opts, Clock* clock)
-    : mesh_(mesh), base_elements_(mesh.elems.size()), mesh_hash_(MeshHash(mesh)),
-      elements_(mesh.elems.size()), patches_(mesh.patches.size()),
-      opts_(opts), clock_(clock), epoch_(clock->Now()) {
+WorkerPool::WorkerPool(const proto::SceneSetup& setup, const PoolOptions& opts, Clock* clock)
+    : opts_(opts), clock_(clock), epoch_(clock->Now()) {
   epoll_ = ::epoll_create1(EPOLL_CLOEXEC);
   CHECK(epoll_ >= 0);  // only out of memory or descriptors: nothing to run on
   proto::EncodeHello(proto::Hello(), &scene_frame_);
   proto::EncodeScene(setup, &scene_frame_);
+}
+
+void WorkerPool::SetMesh(const Mesh& mesh) {
+  mesh_ = &mesh;
+  base_elements_ = elements_ = mesh.elems.size();
+  patches_ = mesh.patches.size();
+  mesh_hash_ = MeshHash(mesh);
+}
+
+// poll(2), not the epoll set: this runs once, before Watch has put any
+// worker in it, and the wake fd is not one of its sources.
+void WorkerPool::SendScene(int wake_fd) {
+  std::vector<pollfd> fds;
+  for (;;) {
+    fds.assign(1, pollfd{wake_fd, POLLIN, 0});
+    for (size_t w = 0; w < workers_.size(); ++w) {
+      Worker& wk = workers_[w];
+      auto done = [&] { return wk.state == State::kLost || wk.scene_sent == scene_frame_.size(); };
+      if (done()) continue;
+      Flush(int(w), &early_);
+      if (!done()) fds.push_back({wk.conn->fd(), wk.conn->Events(true), 0});
+    }
+    if (fds.size() == 1) return;
+    if (::poll(fds.data(), fds.size(), -1) < 0 && errno != EINTR) return;
+    if (fds[0].revents) return;
+  }
 }
 
 WorkerPool::~WorkerPool() {
@@ -281,7 +304,7 @@ void WorkerPool::Assign(int w, const proto::Assignment& a) {
 }
 
 void WorkerPool::Divide(const std::vector<int32_t>& elems) {
-  DivideTo(elems, mesh_.elems.size(), mesh_.patches.size());
+  DivideTo(elems, mesh_->elems.size(), mesh_->patches.size());
 }
 
 void WorkerPool::DivideTo(const std::vector<int32_t>& elems, size_t elements, size_t patches) {
@@ -436,7 +459,10 @@ void WorkerPool::Send(std::vector<WorkerEvent>* events) {
 }
 
 void WorkerPool::Poll(double timeout, std::vector<WorkerEvent>* events) {
+  CHECK(mesh_ != nullptr);
   const size_t before = events->size();
+  for (WorkerEvent& ev : early_) events->push_back(std::move(ev));
+  early_.clear();
   double now = Clk();
   for (size_t w = 0; w < workers_.size(); ++w) {
     Worker& wk = workers_[w];

@@ -97,15 +97,31 @@ class WorkerPool : public Transport {
  public:
   // Deadlines and heartbeats go by `clock` (tests drive it). `setup` is
   // encoded at once and not kept: the pool holds the scene frame only.
-  // Its heartbeat_s is the workers' (normally opts.heartbeat_s).
-  WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh, const PoolOptions& opts,
+  // Its heartbeat_s is the workers' (normally opts.heartbeat_s). The mesh
+  // comes later (SetMesh): workers are started, and sent the scene
+  // (SendScene), while the master meshes it too.
+  WorkerPool(const proto::SceneSetup& setup, const PoolOptions& opts,
              Clock* clock = MonotonicClock());
+  WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh, const PoolOptions& opts,
+             Clock* clock = MonotonicClock())
+      : WorkerPool(setup, opts, clock) {
+    SetMesh(mesh);
+  }
   ~WorkerPool() override;
   // The scene frame is larger than the protocol allows (a scene of some
   // millions of faces): workers cannot take it.
   bool SceneTooLarge() const { return scene_frame_.size() > proto::kMaxFrame; }
   // Bytes every worker is sent before its first work: hello and scene.
   size_t SetupBytes() const { return scene_frame_.size(); }
+  // The mesh as BuildMesh made it from the scene: the workers' readies
+  // are checked against it. Before the first Poll.
+  void SetMesh(const Mesh& mesh);
+  // Writes the hello and scene frame to the workers added so far, waiting
+  // for them to take it, until each has it or is lost, or `wake_fd` is
+  // readable (the master is done meshing). Reads nothing: what they say
+  // waits for Poll, after SetMesh; workers lost here, the first Poll
+  // reports.
+  void SendScene(int wake_fd);
   // Takes a new worker; the hello and the scene are sent at once.
   void Add(std::unique_ptr<Conn> conn, const std::string& name);
   // Polls `source` along with the workers from now on.
@@ -171,10 +187,11 @@ class WorkerPool : public Transport {
   void Watch(std::vector<WorkerEvent>* events);
   void Unwatch(int w);  // before the worker's Conn is closed
 
-  const Mesh& mesh_;
+  const Mesh* mesh_ = nullptr;  // SetMesh's
   std::string scene_frame_;  // encoded once, sent to every worker
-  uint64_t base_elements_, mesh_hash_;  // of the mesh as BuildMesh made it
-  size_t elements_, patches_;           // of the mesh now (DivideTo)
+  uint64_t base_elements_ = 0, mesh_hash_ = 0;  // of the mesh as BuildMesh made it
+  size_t elements_ = 0, patches_ = 0;           // of the mesh now (DivideTo)
+  std::vector<WorkerEvent> early_;              // SendScene's losses, for Poll
   std::vector<int32_t> edits_;          // every Divide so far, in order
   PoolOptions opts_;
   Clock* clock_;

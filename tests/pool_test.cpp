@@ -5,6 +5,7 @@
 // for what the other end sends, never for a fixed time.
 #include "pool.h"
 
+#include <sys/eventfd.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -18,6 +19,7 @@
 
 #include "groups.h"
 #include "protocol.h"
+#include "scene.h"
 #include "peer.h"
 #include "test_util.h"
 #include "worker.h"
@@ -566,6 +568,95 @@ TEST_F(PoolTest, ARealWorkerComputesTheColumn) {
   worker.join();
   ::close(sv[1]);
   EXPECT_EQ(status, 0) << err;
+}
+
+// Workers are started and sent the scene before the master has meshed it
+// (MasterRun::MeshScene): the pool is made without the mesh, SendScene
+// writes the frame, and the ready is checked against the mesh given
+// later. The sockets' buffers are made small, so that the room's frame
+// does not fit in them at once.
+class SendSceneTest : public ::testing::Test {
+ protected:
+  SendSceneTest() {
+    std::string err;
+    std::vector<std::string> warnings;
+    EXPECT_TRUE(LoadScene(ShippedScenePath("room"), &setup_.scene, &err, &warnings)) << err;
+    mesh_ = MakeMesh(setup_.scene);
+    setup_.resolution = 16;
+    EXPECT_EQ(::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv_), 0);
+    const int small = 4096;
+    ::setsockopt(sv_[0], SOL_SOCKET, SO_SNDBUF, &small, sizeof small);
+    ::setsockopt(sv_[1], SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+    wake_ = ::eventfd(0, EFD_CLOEXEC);
+    EXPECT_GE(wake_, 0);
+  }
+  ~SendSceneTest() override { ::close(wake_); }
+  void Wake() {
+    const uint64_t one = 1;
+    ASSERT_EQ(::write(wake_, &one, sizeof one), ssize_t(sizeof one));
+  }
+
+  FakeClock clock_;
+  proto::SceneSetup setup_;
+  Mesh mesh_;
+  int sv_[2];
+  int wake_ = -1;
+};
+
+TEST_F(SendSceneTest, ARealWorkerIsSentTheSceneThenJoinsOnceTheMeshIsGiven) {
+  WorkerPool pool(setup_, PoolOptions(), &clock_);
+  int status = -1;
+  std::string err;
+  std::thread worker([&] { status = RunWorker(sv_[1], sv_[1], &err); });
+  pool.Add(SocketConn(sv_[0]), "thread");
+  pool.SendScene(wake_);  // never woken: it returns once the worker has it all
+  // (more than the buffers hold: AWakeEndsItAndPollSendsTheRest)
+  EXPECT_EQ(pool.BytesSent(), pool.SetupBytes());
+  pool.SetMesh(mesh_);
+  std::vector<WorkerEvent> ev;
+  while (ev.empty()) pool.Poll(10, &ev);  // the worker's ready, checked now
+  ASSERT_EQ(ev[0].kind, WorkerEvent::kJoined) << ev[0].why;
+  pool.Shutdown();
+  worker.join();
+  ::close(sv_[1]);
+  EXPECT_EQ(status, 0) << err;
+}
+
+TEST_F(SendSceneTest, AWakeEndsItAndPollSendsTheRest) {
+  WorkerPool pool(setup_, PoolOptions(), &clock_);
+  pool.Add(SocketConn(sv_[0]), "w");
+  Wake();  // the master is done meshing; the peer has read nothing
+  pool.SendScene(wake_);
+  ASSERT_LT(pool.BytesSent(), pool.SetupBytes());
+  pool.SetMesh(mesh_);
+  size_t got = 0;
+  std::thread reader([&] {
+    char buf[4096];
+    while (got < pool.SetupBytes()) {
+      const ssize_t n = ::read(sv_[1], buf, sizeof buf);
+      if (n <= 0) break;
+      got += size_t(n);
+    }
+  });
+  std::vector<WorkerEvent> ev;
+  while (pool.BytesSent() < pool.SetupBytes()) pool.Poll(10, &ev);
+  reader.join();
+  EXPECT_EQ(got, pool.SetupBytes());
+  EXPECT_TRUE(ev.empty());
+  ::close(sv_[1]);
+}
+
+TEST_F(SendSceneTest, AWorkerLostMeanwhileIsReportedByTheFirstPoll) {
+  WorkerPool pool(setup_, PoolOptions(), &clock_);
+  pool.Add(SocketConn(sv_[0]), "w");
+  ::close(sv_[1]);
+  pool.SendScene(wake_);  // the write fails: lost, nothing to wait for
+  pool.SetMesh(mesh_);
+  std::vector<WorkerEvent> ev;
+  pool.Poll(0, &ev);
+  ASSERT_EQ(ev.size(), 1u);
+  EXPECT_EQ(ev[0].kind, WorkerEvent::kLost);
+  EXPECT_TRUE(Has(ev[0].why, "cannot send")) << ev[0].why;
 }
 
 // A real worker in a child process, killed with an assignment outstanding:
