@@ -65,11 +65,10 @@ class Hemicube {
   void Column(const Mesh& mesh, int shooter, const PatchGroup* group, double angle,
               std::vector<FormFactor>* out, ColumnStats* stats = nullptr);
 
-  // Frees the copy of the mesh the columns read (the cache, about 42
-  // bytes an element) now, not at the next Column's rebuild: for a mesh
-  // that has just changed, so that what comes before that column (a
-  // wave's picture) does not stand beside a copy rebuilt anyway. The
-  // hierarchy over faces stays, for the rebuild to keep (BuildCache).
+  // For a mesh about to change by divisions and splits: frees the parts
+  // of the copy of the mesh the columns read that the next Column makes
+  // anew (the sums' blocks), and keeps those it updates (BuildCache): the
+  // faces, their hierarchy, leaves and outlines, about 30 bytes an element.
   void ReleaseCache();
 
   // Culling on (the default): faces are visited front to back through a
@@ -87,6 +86,12 @@ class Hemicube {
   // How many times the hierarchy over faces was built (not kept from the
   // mesh before a division: BuildCache).
   long HierarchyBuilds() const { return hierarchy_builds_; }
+  // How many times the cache was updated after divisions and splits
+  // rather than built whole (BuildCache).
+  long CacheUpdates() const { return cache_updates_; }
+  // Whether this cache is laid out as `o`'s is, array by array (faces,
+  // boxes, leaves, outlines): an updated cache against one built whole.
+  bool SameCache(const Hemicube& o) const;
 
  private:
   // The mesh as the column reads it, rebuilt when the mesh changes (built,
@@ -137,6 +142,15 @@ class Hemicube {
   };
   static Key KeyOf(const Mesh& mesh);
   void BuildCache(const Mesh& mesh);
+  bool UpdateCache(const Mesh& mesh);
+  // Face cf's leaves' outlines (ranks [cf.lb, cf.le) of elem_) appended to
+  // outline_ or outline_wide_; its vertex ranges and pb set.
+  void PutOutlines(const Mesh& mesh, CacheFace* cf);
+  // The scratch sized to `most` vertices a face, the sums' blocks to the
+  // mesh's elements, the cache's key; both BuildCache and UpdateCache end so.
+  void FinishCache(const Mesh& mesh, size_t most);
+  // The face's box from its vertices and divide_verts, in float rounded out.
+  static FaceBox BoxOf(const Mesh& mesh, const MeshFace& mf);
   // Nodes over faces boxes[order[first, first + count)], reordering `order`.
   int BuildNodes(const Huge<FaceBox>& boxes, std::vector<int>* order, int first,
                  int count);
@@ -180,8 +194,9 @@ class Hemicube {
   // readback, which reads and clears only those.
   int rows_[5][2] = {{INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}, {INT32_MAX, 0}};
 
-  Key key_;
-  long hierarchy_builds_ = 0;
+  Key key_;      // of the mesh the cache holds; empty after ReleaseCache
+  Key cached_;   // of the mesh the cache was last built or updated for
+  long hierarchy_builds_ = 0, cache_updates_ = 0;
   // Faces with leaves in the hierarchy's order, and their outlines in that
   // order: a column reads them front to back, nearly in memory order. The
   // vertices are the mesh's own (a face's are contiguous there but for

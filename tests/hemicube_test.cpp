@@ -238,6 +238,7 @@ TEST(Hemicube, ADivisionKeepsTheHierarchy) {
         ASSERT_TRUE(SameColumn(a, b)) << name << " round " << round << " patch " << p;
       }
       EXPECT_EQ(kept.HierarchyBuilds(), 1) << name << " round " << round;
+      EXPECT_EQ(kept.CacheUpdates(), round + 1) << name << " round " << round;
     }
   }
   // Another mesh of as many faces: kept where its faces lie within the
@@ -259,6 +260,46 @@ TEST(Hemicube, ADivisionKeepsTheHierarchy) {
   EXPECT_EQ(h.HierarchyBuilds(), 1);
   h.Column(twice, 5, GroupOf(twice, 5), 0.0, &a);
   EXPECT_EQ(h.HierarchyBuilds(), 2);
+}
+
+// The cache is updated after divisions and shooter splits, reading again
+// only the faces they touched (UpdateCache), as a worker's is after each
+// pass: it is laid out as a fresh cache is, array by array (a split only
+// reorders its face's leaves, a neighbour's midpoint only adds a T-vertex
+// to an outline: neither would change a column but for depth ties), and
+// its columns are a fresh cache's, bit for bit, pass after pass.
+TEST(Hemicube, AnUpdatedCacheGivesAFreshOnesColumns) {
+  Scene scene;
+  std::string err;
+  std::vector<std::string> warnings;
+  ASSERT_TRUE(LoadScene(ShippedScenePath("room"), &scene, &err, &warnings)) << err;
+  MeshOptions o;
+  o.elements_per_patch = 3;  // patches that can split
+  Mesh m = MakeMesh(scene, o);
+  Hemicube kept(128);
+  std::vector<FormFactor> a, b;
+  kept.Column(m, 0, GroupOf(m, 0), 0.0, &a);
+  for (int pass = 0; pass < 3; ++pass) {
+    kept.ReleaseCache();
+    const int n0 = int(m.patches.size());
+    for (int p = pass; p < n0; p += 9)
+      if (SplitPieces(m, p) > 1) SplitPatch(&m, p);
+    for (int e = pass, e0 = int(m.elems.size()); e < e0; e += 11)
+      if (m.elems[size_t(e)].IsLeaf()) Divide(&m, e);
+    const int n = int(m.patches.size());
+    for (int i = 0; i < 12; ++i) {
+      const int p = i * (n - 1) / 11;
+      Hemicube fresh(128);
+      kept.Column(m, p, GroupOf(m, p), 0.7, &a);
+      fresh.Column(m, p, GroupOf(m, p), 0.7, &b);
+      ASSERT_TRUE(SameColumn(a, b)) << "pass " << pass << " patch " << p;
+      if (i == 0) {
+        EXPECT_TRUE(kept.SameCache(fresh)) << "pass " << pass;
+      }
+    }
+    EXPECT_EQ(kept.CacheUpdates(), pass + 1);
+    EXPECT_EQ(kept.HierarchyBuilds(), 1);
+  }
 }
 
 // Quad a b c d (counter-clockwise seen from its front) cut k x k and each
