@@ -432,7 +432,7 @@ void MasterRun::JoinWorkers() {
     transport_ = run_.fallback();
     return;
   }
-  starting_->SetMesh(mesh_);
+  starting_->SetMesh(mesh_, identity_.base_hash);  // MeshHash of the mesh as built
   if (!UsePoolThread(opts_.pool_thread, local_workers_, sysconf(_SC_NPROCESSORS_ONLN))) {
     transport_ = std::move(starting_);
     return;

@@ -161,11 +161,11 @@ WorkerPool::WorkerPool(const proto::SceneSetup& setup, const PoolOptions& opts, 
   proto::EncodeScene(setup, &scene_frame_);
 }
 
-void WorkerPool::SetMesh(const Mesh& mesh) {
+void WorkerPool::SetMesh(const Mesh& mesh, uint64_t hash) {
   mesh_ = &mesh;
   base_elements_ = elements_ = mesh.elems.size();
   patches_ = mesh.patches.size();
-  mesh_hash_ = MeshHash(mesh);
+  mesh_hash_ = hash;
 }
 
 // poll(2), not the epoll set: this runs once, before Watch has put any

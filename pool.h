@@ -105,7 +105,7 @@ class WorkerPool : public Transport {
   WorkerPool(const proto::SceneSetup& setup, const Mesh& mesh, const PoolOptions& opts,
              Clock* clock = MonotonicClock())
       : WorkerPool(setup, opts, clock) {
-    SetMesh(mesh);
+    SetMesh(mesh, MeshHash(mesh));
   }
   ~WorkerPool() override;
   // The scene frame is larger than the protocol allows (a scene of some
@@ -113,9 +113,10 @@ class WorkerPool : public Transport {
   bool SceneTooLarge() const { return scene_frame_.size() > proto::kMaxFrame; }
   // Bytes every worker is sent before its first work: hello and scene.
   size_t SetupBytes() const { return scene_frame_.size(); }
-  // The mesh as BuildMesh made it from the scene: the workers' readies
-  // are checked against it. Before the first Poll.
-  void SetMesh(const Mesh& mesh);
+  // The mesh as BuildMesh made it from the scene, and its MeshHash (the
+  // caller's, computed once for the run's identity too): the workers'
+  // readies are checked against them. Before the first Poll.
+  void SetMesh(const Mesh& mesh, uint64_t hash);
   // Writes the hello and scene frame to the workers added so far, waiting
   // for them to take it, until each has it or is lost, or `wake_fd` is
   // readable (the master is done meshing). Reads nothing: what they say

@@ -612,7 +612,7 @@ TEST_F(SendSceneTest, ARealWorkerIsSentTheSceneThenJoinsOnceTheMeshIsGiven) {
   pool.SendScene(wake_);  // never woken: it returns once the worker has it all
   // (more than the buffers hold: AWakeEndsItAndPollSendsTheRest)
   EXPECT_EQ(pool.BytesSent(), pool.SetupBytes());
-  pool.SetMesh(mesh_);
+  pool.SetMesh(mesh_, MeshHash(mesh_));
   std::vector<WorkerEvent> ev;
   while (ev.empty()) pool.Poll(10, &ev);  // the worker's ready, checked now
   ASSERT_EQ(ev[0].kind, WorkerEvent::kJoined) << ev[0].why;
@@ -628,7 +628,7 @@ TEST_F(SendSceneTest, AWakeEndsItAndPollSendsTheRest) {
   Wake();  // the master is done meshing; the peer has read nothing
   pool.SendScene(wake_);
   ASSERT_LT(pool.BytesSent(), pool.SetupBytes());
-  pool.SetMesh(mesh_);
+  pool.SetMesh(mesh_, MeshHash(mesh_));
   size_t got = 0;
   std::thread reader([&] {
     char buf[4096];
@@ -651,7 +651,7 @@ TEST_F(SendSceneTest, AWorkerLostMeanwhileIsReportedByTheFirstPoll) {
   pool.Add(SocketConn(sv_[0]), "w");
   ::close(sv_[1]);
   pool.SendScene(wake_);  // the write fails: lost, nothing to wait for
-  pool.SetMesh(mesh_);
+  pool.SetMesh(mesh_, MeshHash(mesh_));
   std::vector<WorkerEvent> ev;
   pool.Poll(0, &ev);
   ASSERT_EQ(ev.size(), 1u);
