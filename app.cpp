@@ -215,8 +215,9 @@ void MasterRun::Build() {
                  scene_.faces.size(), mesh_.faces.size(), mesh_.patches.size(), mesh_.elems.size(),
                  mesh_.patch_size, t1 - t0, t2 - t1);
 
-  // A checkpoint to resume is checked before anything is started; one to
-  // write must be writable before the run starts.
+  // A checkpoint to resume is checked, and one to write must be writable,
+  // before the run starts (the workers are meshing already: refused here,
+  // the master exits and they see the connection end).
   const SolveOptions solve{run_.overshoot, run_.resolution, run_.rotate, run_.seed,
                            run_.log_every,  opts_.mesh,     opts_.subdivide, opts_.sub};
   identity_ = Identify(scene_, mesh_, solve);
