@@ -269,10 +269,7 @@ TEST(Hemicube, ADivisionKeepsTheHierarchy) {
 // to an outline: neither would change a column but for depth ties), and
 // its columns are a fresh cache's, bit for bit, pass after pass.
 TEST(Hemicube, AnUpdatedCacheGivesAFreshOnesColumns) {
-  Scene scene;
-  std::string err;
-  std::vector<std::string> warnings;
-  ASSERT_TRUE(LoadScene(ShippedScenePath("room"), &scene, &err, &warnings)) << err;
+  const Scene scene = ShippedScene("room");
   MeshOptions o;
   o.elements_per_patch = 3;  // patches that can split
   Mesh m = MakeMesh(scene, o);

@@ -156,10 +156,8 @@ TEST(Mesh, MeshHashSeesGeometryAndHierarchy) {
 TEST(Mesh, VerticesFreedAtTheReadHookChangeNothing) {
   size_t corners = 0;
   for (const char* name : {"cornell", "cornell-holes", "room", "maze", "blender"}) {
-    Scene scene;
+    Scene scene = ShippedScene(name);
     std::string err;
-    std::vector<std::string> warnings;
-    ASSERT_TRUE(LoadScene(ShippedScenePath(name), &scene, &err, &warnings)) << err;
     const Mesh want = MakeMesh(scene);
     Mesh got;
     int calls = 0;
@@ -181,10 +179,8 @@ TEST(Mesh, VerticesFreedAtTheReadHookChangeNothing) {
 // their array too.
 TEST(Mesh, SurfacesConsumedAsCutChangeNothing) {
   for (const char* name : {"cornell", "cornell-holes", "room", "maze", "blender"}) {
-    Scene scene;
+    Scene scene = ShippedScene(name);
     std::string err;
-    std::vector<std::string> warnings;
-    ASSERT_TRUE(LoadScene(ShippedScenePath(name), &scene, &err, &warnings)) << err;
     const std::vector<Surface> surfaces = BuildSurfaces(scene, true);
     Mesh want, got;
     ASSERT_TRUE(BuildMesh(scene, surfaces, MeshOptions(), &want, &err)) << err;

@@ -578,9 +578,7 @@ TEST_F(PoolTest, ARealWorkerComputesTheColumn) {
 class SendSceneTest : public ::testing::Test {
  protected:
   SendSceneTest() {
-    std::string err;
-    std::vector<std::string> warnings;
-    EXPECT_TRUE(LoadScene(ShippedScenePath("room"), &setup_.scene, &err, &warnings)) << err;
+    setup_.scene = ShippedScene("room");
     mesh_ = MakeMesh(setup_.scene);
     setup_.resolution = 16;
     EXPECT_EQ(::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv_), 0);

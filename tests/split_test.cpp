@@ -295,10 +295,7 @@ TEST(Split, CloseReceiversSplitAPatch) {
 // every top element for each patch finds, pass after pass of splits that
 // hand divided tops' places to their children.
 TEST(Split, CloseReceiversAreWhatEveryTopFinds) {
-  Scene scene;
-  std::string err;
-  std::vector<std::string> warnings;
-  ASSERT_TRUE(LoadScene(ShippedScenePath("room"), &scene, &err, &warnings)) << err;
+  const Scene scene = ShippedScene("room");
   MeshOptions o;
   o.elements_per_patch = 3;  // 9 top elements a patch
   Mesh m = MakeMesh(scene, o);
@@ -356,10 +353,7 @@ TEST(Split, CloseReceiversAreWhatEveryTopFinds) {
 // Prepare), finds what the pass's own search finds; and one made ahead
 // of a later pass searches only the pieces the pass would.
 TEST(Split, ClosenessSearchedAheadIsWhatThePassFinds) {
-  Scene scene;
-  std::string err;
-  std::vector<std::string> warnings;
-  ASSERT_TRUE(LoadScene(ShippedScenePath("room"), &scene, &err, &warnings)) << err;
+  const Scene scene = ShippedScene("room");
   MeshOptions o;
   o.elements_per_patch = 3;
   Mesh plain = MakeMesh(scene, o), ahead = MakeMesh(scene, o);

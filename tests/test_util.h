@@ -104,15 +104,25 @@ inline std::string ShippedScenePath(const std::string& name) {
   return path;
 }
 
-// A shipped scene meshed with the default options (aborts with the error
-// should it not load: the tests that use it test other things).
-inline Mesh ShippedMesh(const std::string& name) {
+// A shipped scene, loaded (aborts with the error should it not load: the
+// tests that use it test other things).
+inline Scene ShippedScene(const std::string& name) {
   Scene scene;
   std::string err;
   std::vector<std::string> warnings;
+  if (!LoadScene(ShippedScenePath(name), &scene, &err, &warnings)) {
+    std::fprintf(stderr, "%s: %s\n", name.c_str(), err.c_str());
+    std::abort();
+  }
+  return scene;
+}
+
+// A shipped scene meshed with the default options (aborts likewise).
+inline Mesh ShippedMesh(const std::string& name) {
+  const Scene scene = ShippedScene(name);
   Mesh mesh;
-  if (!LoadScene(ShippedScenePath(name), &scene, &err, &warnings) ||
-      !BuildMesh(scene, MeshOptions(), &mesh, &err)) {
+  std::string err;
+  if (!BuildMesh(scene, MeshOptions(), &mesh, &err)) {
     std::fprintf(stderr, "%s: %s\n", name.c_str(), err.c_str());
     std::abort();
   }
