@@ -359,6 +359,8 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   // Room for every patch and, should a sum stay 0, every form factor.
   if (touched_.size() < patch_.size() + n) touched_.resize(patch_.size() + n);
   int32_t* const touched = touched_.data();
+  if (stale_.size() < n) stale_.resize(n);
+  uint32_t* const stale_at = stale_.data();
   // The arrays as local pointers: as members they were loaded again at
   // every element (a store through one of them might, for all the compiler
   // knows, have changed another).
@@ -373,7 +375,7 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
   auto elements = [&](auto extras, auto fetch_ahead) {
     constexpr bool kExtras = decltype(extras)::value;
     constexpr bool kAheadOn = decltype(fetch_ahead)::value;
-    size_t reached = 0;
+    size_t reached = 0, stale = 0;
     // Its patch's record (ρ, Σ F: one line) is fetched kAhead early too,
     // from its patch id fetched 2 kAhead early.
     for (size_t i = 0; i < n; ++i) {
@@ -393,48 +395,60 @@ void Solver::Shoot(int p, const std::vector<FormFactor>& column) {
         }
       }
       const int32_t e = col[i].elem;
-      int32_t q = patch_of[e];
+      const int32_t q = patch_of[e];
+      // Divided since the column was computed: after the loop, so that
+      // the loop calls nothing (a call made it keep its values on the
+      // stack, and load them again at every element).
+      if (q < 0) {
+        stale_at[stale++] = uint32_t(i);
+        continue;
+      }
       const double f = double(col[i].f);
       // ρ/A from the patch's ρ and the element's 1/A here rather than a
       // copy per element (24 bytes an element). 1/A is the solver's copy
       // beside B (elem_), not Mesh::elem_area, another cache line each.
-      if (q >= 0) {
-        const glm::dvec3 w = (f * elem[size_t(e)].inv_area) * mats[patch[size_t(q)].material].rho;
-        const glm::dvec3 gain = xa * w;
-        elem[e].b += gain;
-        if (kExtras) {
-          if (direct) direct_[e] += float(Lum(ka * w));
-          if (noisy) noise_[e] += ShotNoise(Lum(gain), f, pixel(q));
-          if (track_) Changed(e);
-        }
-      } else {  // divided since the column was computed: each leaf gains alike
-        q = ~q;
-        mesh_.LeavesUnder(e, &leaves_);
-        const glm::dvec3 w = (f * elem[size_t(e)].inv_area) * mats[patch[size_t(q)].material].rho;
-        const glm::dvec3 gain = xa * w;
-        const double var = noisy ? ShotNoise(Lum(gain), f, pixel(q)) : 0;
-        const float first = direct ? float(Lum(ka * w)) : 0.0f;
-        bool one_patch = true;
-        for (int l : leaves_) {
-          elem[l].b += gain;
-          if (direct) direct_[l] += first;
-          if (noisy) noise_[l] += var;
-          if (track_) Changed(l);
-          one_patch &= patch_of[size_t(l)] == q;
-        }
-        if (!one_patch) {  // and split since: each piece reflects its leaves' share
-          for (int l : leaves_) {
-            const int32_t r = patch_of[size_t(l)];
-            touched[reached] = r;
-            reached += patch[r].fsum == 0;
-            patch[r].fsum += f * (mesh_.elem_area[size_t(l)] / mesh_.elem_area[size_t(e)]);
-          }
-          continue;
-        }
+      const glm::dvec3 w = (f * elem[size_t(e)].inv_area) * mats[patch[size_t(q)].material].rho;
+      const glm::dvec3 gain = xa * w;
+      elem[e].b += gain;
+      if (kExtras) {
+        if (direct) direct_[e] += float(Lum(ka * w));
+        if (noisy) noise_[e] += ShotNoise(Lum(gain), f, pixel(q));
+        if (track_) Changed(e);
       }
       touched[reached] = q;
       reached += patch[q].fsum == 0;
       patch[q].fsum += f;
+    }
+    for (size_t k = 0; k < stale; ++k) {  // each leaf gains alike
+      const size_t i = stale_at[k];
+      const int32_t e = col[i].elem;
+      const int32_t q = ~patch_of[e];
+      const double f = double(col[i].f);
+      mesh_.LeavesUnder(e, &leaves_);
+      const glm::dvec3 w = (f * elem[size_t(e)].inv_area) * mats[patch[size_t(q)].material].rho;
+      const glm::dvec3 gain = xa * w;
+      const double var = noisy ? ShotNoise(Lum(gain), f, pixel(q)) : 0;
+      const float first = direct ? float(Lum(ka * w)) : 0.0f;
+      bool one_patch = true;
+      for (int l : leaves_) {
+        elem[l].b += gain;
+        if (direct) direct_[l] += first;
+        if (noisy) noise_[l] += var;
+        if (track_) Changed(l);
+        one_patch &= patch_of[size_t(l)] == q;
+      }
+      if (one_patch) {
+        touched[reached] = q;
+        reached += patch[q].fsum == 0;
+        patch[q].fsum += f;
+        continue;
+      }
+      for (int l : leaves_) {  // and split since: each piece reflects its leaves' share
+        const int32_t r = patch_of[size_t(l)];
+        touched[reached] = r;
+        reached += patch[r].fsum == 0;
+        patch[r].fsum += f * (mesh_.elem_area[size_t(l)] / mesh_.elem_area[size_t(e)]);
+      }
     }
     return reached;
   };

@@ -235,6 +235,7 @@ class Solver {
   static_assert(sizeof(PatchShot) == 64, "one cache line");
   std::vector<PatchShot, HugePageAllocator<PatchShot>> patch_;
   std::vector<int32_t> touched_;    // Shoot's scratch: the patches it reached
+  std::vector<uint32_t> stale_;     // Shoot's scratch: where its column has divided elements
   // Per element, a bit: in changed_. Bits, not bytes, so that Shoot's
   // scattered tests hit 66 KB at 529,260 elements, not 529 KB.
   std::vector<uint64_t> changed_bits_;

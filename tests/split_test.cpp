@@ -3,6 +3,7 @@
 // the edit on the wire and in checkpoints.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <thread>
 
 #include "checkpoint.h"
@@ -186,6 +187,56 @@ TEST(Split, SolverKeepsTheUnshotPower) {
     ShotColumn(&h, m, s, GroupOf(m, s), solver.TimesShot(s), true, 1, &col);
     solver.Shoot(s, col);
   }
+}
+
+// A column computed before its receiver was divided and then split into
+// the divided element's children: each leaf gains what the element
+// would have, and each piece the unshot power of its leaf's share.
+TEST(Split, AColumnFromBeforeADivisionAndASplitFeedsEachPiece) {
+  Mesh m = MakeMesh(Floor(), Coarse());
+  Solver solver(m, false);
+  Hemicube h(64);
+  const int p = solver.Select();  // the light
+  const double shot = solver.unshot()[p].r * m.patch_area[size_t(p)];
+  std::vector<FormFactor> col;
+  ShotColumn(&h, m, p, GroupOf(m, p), solver.TimesShot(p), true, 1, &col);
+  const FormFactor hit = col[col.size() / 2];
+  const int t = hit.elem, fp = m.elems[t].patch;
+  ASSERT_EQ(m.Tops(fp).size(), 4u);
+  SplitPatch(&m, fp);  // one piece per top element; t's is fp or a new one
+  solver.Split(fp);
+  solver.SplitsDone();
+  const int piece = m.elems[t].patch;
+  Divide(&m, t);
+  solver.Divided({t});
+  ASSERT_EQ(SplitPieces(m, piece), 4);
+  SplitPatch(&m, piece);  // now one piece per child of t
+  solver.Split(piece);
+  solver.SplitsDone();
+  std::vector<int> leaves;
+  m.LeavesUnder(t, &leaves);
+  ASSERT_EQ(leaves.size(), 4u);
+  const std::vector<glm::dvec3> b0(solver.radiosity().begin(), solver.radiosity().end());
+  const std::vector<glm::dvec3> u0 = solver.unshot();
+  solver.Shoot(p, col);
+  const std::vector<glm::dvec3> u1 = solver.unshot();
+  const double rho = m.Rho(m.FaceOf(t)).r;
+  const double gain = rho * shot * hit.f / m.elem_area[size_t(t)];
+  std::vector<int> pieces;
+  for (int l : leaves) {
+    EXPECT_NEAR(solver.radiosity()[l].r - b0[size_t(l)].r, gain, 1e-12 * gain);
+    const int q = m.elems[l].patch;
+    pieces.push_back(q);
+    // Each piece is this leaf alone and reached by no other element.
+    EXPECT_NEAR((u1[size_t(q)].r - u0[size_t(q)].r) * m.patch_area[size_t(q)],
+                gain * m.elem_area[size_t(l)], 1e-12 * gain * m.elem_area[size_t(l)]);
+  }
+  std::sort(pieces.begin(), pieces.end());
+  EXPECT_EQ(std::unique(pieces.begin(), pieces.end()), pieces.end());
+  // And the power reflected is what the column says.
+  double want = 0;
+  for (const FormFactor& f : col) want += m.Rho(m.FaceOf(f.elem)).r * shot * f.f;
+  EXPECT_NEAR(Sum(u1, m, 0) - (Sum(u0, m, 0) - shot), want, 1e-12 * want);
 }
 
 // A pass's splits brought up to date once (SplitsDone) leave the solver
