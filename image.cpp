@@ -7,6 +7,7 @@
 #include <stb_image_write.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -186,13 +187,45 @@ void CheckPolys(const ShadedMesh& mesh) {
     for (int k = 0; k < PolySize(q); ++k) CHECK(q[k] >= 0 && q[k] < n);
 }
 
-// Exposure, clamp, exact sRGB transfer curve, 8 bits with rounding.
-uint8_t Encode(float linear, float exposure) {
-  const double v = double(linear) * exposure;
-  if (!(v > 0)) return 0;  // also NaN
-  if (v >= 1) return 255;
+// A double's bits, and back: for values >= 0 the bits are in the order of
+// the values (sign, exponent, mantissa), so they sort and bisect them.
+uint64_t BitsOf(double v) {
+  uint64_t b;
+  std::memcpy(&b, &v, sizeof b);
+  return b;
+}
+double OfBits(uint64_t b) {
+  double v;
+  std::memcpy(&v, &b, sizeof v);
+  return v;
+}
+
+// The exact sRGB transfer curve, 8 bits with rounding, for 0 < v < 1.
+int CurveCode(double v) {
   const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
-  return uint8_t(std::lround(s * 255));
+  return int(std::lround(s * 255));
+}
+
+// thresholds[k]: the least v in (0, 1) that CurveCode takes to k or more
+// (k = 1..255; 0 for k = 0), found by bisection over the bits of v (a
+// positive double's bits are in the order of its value). The curve rises
+// with v, so a code is the number of thresholds at or below v: what
+// CurveCode gives, bit for bit, without its pow, which result.ply paid
+// three times a vertex (6.6 million at 10^6 elements).
+const std::array<double, 256>& Thresholds() {
+  static const std::array<double, 256> t = [] {
+    std::array<double, 256> t{};
+    for (int k = 1; k < 256; ++k) {
+      uint64_t lo = BitsOf(0.0), hi = BitsOf(1.0);  // CurveCode(lo) < k <= CurveCode(hi)
+      while (hi - lo > 1) {
+        const uint64_t mid = lo + (hi - lo) / 2;
+        (CurveCode(OfBits(mid)) >= k ? hi : lo) = mid;
+      }
+      t[size_t(k)] = OfBits(hi);
+    }
+    return t;
+  }();
+  return t;
 }
 
 void AppendBytes(void* context, void* data, int size) {
@@ -200,6 +233,16 @@ void AppendBytes(void* context, void* data, int size) {
 }
 
 }  // namespace
+
+uint8_t EncodeSrgb8(float linear, float exposure) {
+  const double v = double(linear) * exposure;  // exact: a float times a float
+  if (!(v > 0)) return 0;                      // also NaN
+  if (v >= 1) return 255;
+  const double* t = Thresholds().data();
+  size_t k = 0;  // the last threshold at or below v, halving the range
+  for (size_t step = 128; step > 0; step /= 2) k += t[k + step] <= v ? step : 0;
+  return uint8_t(k);
+}
 
 std::string JsonString(const std::string& s) {
   std::string out;
@@ -356,11 +399,7 @@ float AutoExposure(const ShadedMesh& mesh) {
   // Bins of luminance by the top 16 bits of the double (sign, exponent, 4
   // bits of mantissa: in the order of the values, as they are >= 0), of
   // the vertices of some weight.
-  auto bin_of = [](double lum) {
-    uint64_t bits;
-    std::memcpy(&bits, &lum, sizeof bits);
-    return size_t(bits >> 48);
-  };
+  auto bin_of = [](double lum) { return size_t(BitsOf(lum) >> 48); };
   std::vector<uint32_t> count(size_t(1) << 15, 0);
   double total = 0, brightest = 0;
   size_t weighted = 0;
@@ -450,7 +489,7 @@ bool WriteImage(const Image& img, float exposure, const std::vector<std::string>
   }
   std::vector<uint8_t> rgb(img.pixels.size() * 3);
   for (size_t i = 0; i < img.pixels.size(); ++i)
-    for (int k = 0; k < 3; ++k) rgb[3 * i + k] = Encode(img.pixels[i][k], exposure);
+    for (int k = 0; k < 3; ++k) rgb[3 * i + k] = EncodeSrgb8(img.pixels[i][k], exposure);
 
   // PNG is encoded in memory, because stbi_write_png ignores write errors.
   std::string bytes;
@@ -510,7 +549,7 @@ bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
         s += ' ';
       }
       for (int k = 0; k < 3; ++k) {
-        AppendInt(&s, Encode(c[k], exposure));
+        AppendInt(&s, EncodeSrgb8(c[k], exposure));
         s += k < 2 ? ' ' : '\n';
       }
       if (!flush(1 << 20)) return false;

@@ -3,6 +3,7 @@
 #define RADIOSITY_IMAGE_H
 
 #include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -63,6 +64,11 @@ void Render(const ShadedMesh& mesh, const Camera& cam, int width, int height,
 // Exposure from the scene: the scale that maps linear radiosity to display
 // values (see image.cpp for the rule).
 float AutoExposure(const ShadedMesh& mesh);
+
+// A linear value as 8-bit sRGB, as the PNG pictures and result.ply hold
+// it: times the exposure, clamped to [0, 1] (NaN: 0), the exact sRGB
+// transfer curve, rounded.
+uint8_t EncodeSrgb8(float linear, float exposure);
 
 // Writes the picture to every path in PATHS, encoded once (the last
 // wave's frame and final.png are one picture; a PNG of 512 x 512 takes

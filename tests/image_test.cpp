@@ -408,6 +408,42 @@ TEST(Image, AutoExposureIsTheWeightedPercentileOfASort) {
       }
 }
 
+// The codes change where the sRGB curve (IEC 61966-2-1) crosses k - 0.5
+// of 255: those points from the curve's inverse, and each code checked a
+// hair either side of its boundary, at several exposures, then at a
+// million random values against the count of boundaries below them.
+TEST(Image, EncodeSrgb8IsTheCurveRounded) {
+  std::vector<double> edge(256, 0.0);  // edge[k]: where k - 1 becomes k
+  for (int k = 1; k < 256; ++k) {
+    const double s = (k - 0.5) / 255;
+    edge[size_t(k)] = s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4);
+  }
+  for (float exposure : {1.0f, 0.37f, 2.0f, 1000.0f}) {
+    for (int k = 1; k < 256; ++k) {
+      const float below = float(edge[size_t(k)] * (1 - 1e-6) / exposure);
+      const float above = float(edge[size_t(k)] * (1 + 1e-6) / exposure);
+      EXPECT_EQ(EncodeSrgb8(below, exposure), k - 1) << k << " at exposure " << exposure;
+      EXPECT_EQ(EncodeSrgb8(above, exposure), k) << k << " at exposure " << exposure;
+    }
+  }
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> log_v(-12, 0.1);
+  for (int i = 0; i < 1000000; ++i) {
+    const float v = float(std::pow(10.0, log_v(rng)));
+    const auto at = std::upper_bound(edge.begin() + 1, edge.end(), double(v));
+    const double near = std::min(at == edge.end() ? 1.0 : *at, 1.0);
+    if (std::abs(double(v) - near) < 1e-6 * near || std::abs(double(v) - at[-1]) < 1e-6 * at[-1])
+      continue;  // a hair from a boundary: checked above
+    const int want = v >= 1 ? 255 : int(at - edge.begin()) - 1;
+    ASSERT_EQ(EncodeSrgb8(v, 1.0f), want) << v;
+  }
+  EXPECT_EQ(EncodeSrgb8(0.0f, 1.0f), 0);
+  EXPECT_EQ(EncodeSrgb8(-1.0f, 1.0f), 0);
+  EXPECT_EQ(EncodeSrgb8(std::nanf(""), 1.0f), 0);
+  EXPECT_EQ(EncodeSrgb8(1.0f, 1.0f), 255);
+  EXPECT_EQ(EncodeSrgb8(0.5f, 4.0f), 255);
+}
+
 TEST_F(ImageFiles, WriteImagePpmAndPng) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   Image img;
