@@ -532,7 +532,7 @@ bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
          "property uchar red\nproperty uchar green\nproperty uchar blue\n";
     s += "element face " + std::to_string(mesh.polys.size()) + "\n";
     s += "property list uchar int vertex_indices\nend_header\n";
-    // Written out a megabyte at a time: the whole text is some 270 bytes
+    // Written out a megabyte at a time: the whole text is some 100 bytes
     // an element.
     auto flush = [&](size_t at_least) {
       if (s.size() < at_least) return true;
@@ -543,9 +543,9 @@ bool WritePly(const ShadedMesh& mesh, float exposure, const std::string& path,
     for (size_t i = 0; i < mesh.positions().size(); ++i) {
       const glm::dvec3& p = mesh.positions()[i];
       const glm::vec3& c = mesh.colors[i];
-      // "%.9g %.9g %.9g %d %d %d\n": a float survives the round trip.
+      // Each coordinate as the float it reads back as, then the colour.
       for (int k = 0; k < 3; ++k) {
-        AppendG9(&s, double(float(p[k])));
+        AppendFloat(&s, float(p[k]));
         s += ' ';
       }
       for (int k = 0; k < 3; ++k) {

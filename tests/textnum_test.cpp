@@ -3,14 +3,15 @@
 #include <cfloat>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
-// The outputs' text is what printf gave before (result.csv and result.ply
-// byte for byte): %.9g and %d.
+// result.csv's text is what printf gave before, byte for byte: %.9g and %d.
 TEST(TextNum, G9IsPrintfsPercentPoint9g) {
   std::vector<double> values = {0.0, -0.0, 1.0, -1.0, 0.1, 1e-5, 1e-4, 123456789.0, 1234567890.0,
                                 1e16, 1e-300, DBL_MIN, DBL_MAX, DBL_TRUE_MIN, FLT_MAX, 0.5,
@@ -37,4 +38,30 @@ TEST(TextNum, IntIsPrintfsPercentD) {
     AppendInt(&got, v);
     EXPECT_EQ(got, std::string("x") + want);
   }
+}
+
+// result.ply's coordinates: each reads back as the float written, in no
+// more characters than %.9g takes.
+TEST(TextNum, FloatReadsBackAsItself) {
+  std::vector<float> values = {0.0f, -0.0f, 1.0f, -1.0f, 0.1f, 2.5f, 1e-4f, 0.454545468f, 1e10f,
+                               FLT_MIN, FLT_MAX, FLT_TRUE_MIN, -FLT_MAX};
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> exponent(-40, 38), mantissa(-1, 1);
+  for (int i = 0; i < 100000; ++i) values.push_back(mantissa(rng) * std::pow(10.0f, exponent(rng)));
+  for (float v : values) {
+    std::string got;
+    AppendFloat(&got, v);
+    char* end = nullptr;
+    const float back = std::strtof(got.c_str(), &end);
+    ASSERT_EQ(*end, '\0') << got;
+    ASSERT_EQ(std::signbit(back), std::signbit(v)) << got;
+    ASSERT_EQ(back, v) << got;
+    char g9[64];
+    std::snprintf(g9, sizeof g9, "%.9g", double(v));
+    ASSERT_LE(got.size(), std::strlen(g9)) << got << " against " << g9;
+  }
+  std::string s;
+  AppendFloat(&s, 0.1f);
+  AppendFloat(&s, 2.5f);
+  EXPECT_EQ(s, "0.12.5");
 }
