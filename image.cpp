@@ -19,6 +19,7 @@
 #include "check.h"
 #include "exr.h"
 #include "files.h"
+#include "radix_sort.h"
 #include "textnum.h"
 
 namespace {
@@ -456,13 +457,15 @@ float AutoExposure(const ShadedMesh& mesh) {
     if (least == most) {
       ws.reserve(runs[r].vertices);
       walk([&](size_t i) { ws.push_back(w[i]); });
-      std::sort(ws.begin(), ws.end());
+      RadixSort(&ws, BitsOf);
       for (double weight : ws)
         if (add(least, weight)) break;
     } else {
       lw.reserve(runs[r].vertices);
       walk([&](size_t i) { lw.emplace_back(lum_of(i), w[i]); });
-      std::sort(lw.begin(), lw.end());
+      // By weight, then (stably) by luminance: std::sort's order of pairs.
+      RadixSort(&lw, [&](const std::pair<double, double>& x) { return BitsOf(x.second); });
+      RadixSort(&lw, [&](const std::pair<double, double>& x) { return BitsOf(x.first); });
       for (const auto& [lum, weight] : lw)
         if (add(lum, weight)) break;
     }
