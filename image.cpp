@@ -474,7 +474,7 @@ float AutoExposure(const ShadedMesh& mesh) {
     if (least == most) {
       ws.reserve(runs[r].vertices);
       walk([&](size_t i) { ws.push_back(w[i]); });
-      RadixSort(&ws, BitsOf);
+      RadixSort(&ws, [](double x) { return BitsOf(x); });
       for (double weight : ws)
         if (add(least, weight)) break;
     } else {
