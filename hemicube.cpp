@@ -573,6 +573,10 @@ void Hemicube::DrawFace(const Mesh& mesh, int f, uint32_t mask, double* clock) {
   }
 }
 
+void Hemicube::Prepare(const Mesh& mesh) {
+  if (!(key_ == KeyOf(mesh))) BuildCache(mesh);
+}
+
 void Hemicube::Column(const Mesh& mesh, int shooter, const PatchGroup* group, double angle,
                       std::vector<FormFactor>* out, ColumnStats* stats) {
   const double t0 = MonotonicSeconds();
@@ -601,7 +605,7 @@ void Hemicube::Column(const Mesh& mesh, int shooter, const PatchGroup* group, do
   near_ = float(1e-5 * mesh.scene_diagonal);
   coplanar_ = 1e-10 * (mesh.scene_diagonal + glm::length(c));
   margin_ = 1e-5 * mesh.scene_diagonal;
-  if (!(key_ == KeyOf(mesh))) BuildCache(mesh);
+  Prepare(mesh);
   // depth_ and item_ are clear: the constructor, then each readback, clear
   // the rows a column wrote.
   std::fill(tile_min_.begin(), tile_min_.end(), 0.0f);

@@ -65,6 +65,11 @@ class Hemicube {
   void Column(const Mesh& mesh, int shooter, const PatchGroup* group, double angle,
               std::vector<FormFactor>* out, ColumnStats* stats = nullptr);
 
+  // Makes the copy of the mesh the columns read (Column makes it when the
+  // mesh has changed since), so that a worker has it before the first
+  // work comes.
+  void Prepare(const Mesh& mesh);
+
   // For a mesh about to change by divisions and splits: frees the parts
   // of the copy of the mesh the columns read that the next Column makes
   // anew (the sums' blocks), and keeps those it updates (BuildCache): the
