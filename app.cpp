@@ -348,7 +348,7 @@ void MasterRun::StartWorkers() {
   proto::SceneSetup setup{std::move(scene_), opts_.mesh, run_.resolution, run_.rotate, run_.seed,
                           opts_.pool.heartbeat_s};
   const double t0 = MonotonicSeconds();
-  auto pool = std::make_unique<WorkerPool>(setup, mesh_, opts_.pool);
+  auto pool = std::make_unique<WorkerPool>(setup, opts_.pool);  // the mesh comes at JoinWorkers
   scene_ = std::move(setup.scene);
   if (opts_.verbosity >= 2)
     std::fprintf(stderr, "radiosity: scene frame of %zu bytes (%.1f a face), encoded in %.2f s\n",
