@@ -53,7 +53,7 @@ bool Reader::U8(uint8_t* v, const char* what) {
 bool Reader::F64(double* d, const char* what) {
   uint64_t bits;
   if (!Fixed(8, &bits, what)) return false;
-  std::memcpy(d, &bits, 8);
+  *d = BitsDouble(bits);
   return true;
 }
 

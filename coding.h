@@ -39,11 +39,21 @@ inline void PutVarint(std::string* out, uint64_t v) {
   out->push_back(char(v));
 }
 
-inline void PutF64(std::string* out, double d) {
+// A double's IEEE 754 bits, and the double of such bits. For doubles
+// >= 0 the bits are in the order of the values: they sort and bisect as
+// the values do (image.cpp's exposure and sRGB codes).
+inline uint64_t DoubleBits(double d) {
   uint64_t bits;
   std::memcpy(&bits, &d, 8);
-  PutFixed64(out, bits);
+  return bits;
 }
+inline double BitsDouble(uint64_t bits) {
+  double d;
+  std::memcpy(&d, &bits, 8);
+  return d;
+}
+
+inline void PutF64(std::string* out, double d) { PutFixed64(out, DoubleBits(d)); }
 
 // IEEE 754 single (the browser view's mesh: WebGL draws in float).
 inline void PutF32(std::string* out, float f) {

@@ -73,17 +73,12 @@ bool CodeRange(uint32_t code24) { return code24 >= kLo24 && code24 <= kHi24; }
 
 // The value of a code (not the escape), exactly.
 double CodeValue(uint32_t code) {
-  const uint64_t bits = (uint64_t(code) + kDoubleBias) << kDoubleShift;
-  double d;
-  std::memcpy(&d, &bits, 8);
-  return d;
+  return BitsDouble((uint64_t(code) + kDoubleBias) << kDoubleShift);
 }
 
 // The code nearest to x > 0 (ties up), clamped to 1 .. kCodeMax.
 uint32_t CodeRound(double x) {
-  uint64_t bits;
-  std::memcpy(&bits, &x, 8);
-  const int64_t q = int64_t((bits + (uint64_t(1) << (kDoubleShift - 1))) >> kDoubleShift) - int64_t(kDoubleBias);
+  const int64_t q = int64_t((DoubleBits(x) + (uint64_t(1) << (kDoubleShift - 1))) >> kDoubleShift) - int64_t(kDoubleBias);
   return uint32_t(std::min<int64_t>(std::max<int64_t>(q, 1), kCodeMax));
 }
 

@@ -17,6 +17,7 @@
 #include <utility>
 
 #include "check.h"
+#include "coding.h"
 #include "exr.h"
 #include "files.h"
 #include "radix_sort.h"
@@ -200,19 +201,6 @@ void CheckPolys(const ShadedMesh& mesh) {
     for (int k = 0; k < PolySize(q); ++k) CHECK(q[k] >= 0 && q[k] < n);
 }
 
-// A double's bits, and back: for values >= 0 the bits are in the order of
-// the values (sign, exponent, mantissa), so they sort and bisect them.
-uint64_t BitsOf(double v) {
-  uint64_t b;
-  std::memcpy(&b, &v, sizeof b);
-  return b;
-}
-double OfBits(uint64_t b) {
-  double v;
-  std::memcpy(&v, &b, sizeof v);
-  return v;
-}
-
 // The exact sRGB transfer curve, 8 bits with rounding, for 0 < v < 1.
 int CurveCode(double v) {
   const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
@@ -229,12 +217,12 @@ const std::array<double, 256>& Thresholds() {
   static const std::array<double, 256> t = [] {
     std::array<double, 256> t{};
     for (int k = 1; k < 256; ++k) {
-      uint64_t lo = BitsOf(0.0), hi = BitsOf(1.0);  // CurveCode(lo) < k <= CurveCode(hi)
+      uint64_t lo = DoubleBits(0.0), hi = DoubleBits(1.0);  // CurveCode(lo) < k <= CurveCode(hi)
       while (hi - lo > 1) {
         const uint64_t mid = lo + (hi - lo) / 2;
-        (CurveCode(OfBits(mid)) >= k ? hi : lo) = mid;
+        (CurveCode(BitsDouble(mid)) >= k ? hi : lo) = mid;
       }
-      t[size_t(k)] = OfBits(hi);
+      t[size_t(k)] = BitsDouble(hi);
     }
     return t;
   }();
@@ -417,7 +405,7 @@ float AutoExposure(const ShadedMesh& mesh) {
   // Bins of luminance by the top 16 bits of the double (sign, exponent, 4
   // bits of mantissa: in the order of the values, as they are >= 0), of
   // the vertices of some weight.
-  auto bin_of = [](double lum) { return size_t(BitsOf(lum) >> 48); };
+  auto bin_of = [](double lum) { return size_t(DoubleBits(lum) >> 48); };
   std::vector<uint32_t> count(size_t(1) << 15, 0);
   double total = 0, brightest = 0;
   size_t weighted = 0;
@@ -474,15 +462,15 @@ float AutoExposure(const ShadedMesh& mesh) {
     if (least == most) {
       ws.reserve(runs[r].vertices);
       walk([&](size_t i) { ws.push_back(w[i]); });
-      RadixSort(&ws, [](double x) { return BitsOf(x); });
+      RadixSort(&ws, [](double x) { return DoubleBits(x); });
       for (double weight : ws)
         if (add(least, weight)) break;
     } else {
       lw.reserve(runs[r].vertices);
       walk([&](size_t i) { lw.emplace_back(lum_of(i), w[i]); });
       // By weight, then (stably) by luminance: std::sort's order of pairs.
-      RadixSort(&lw, [&](const std::pair<double, double>& x) { return BitsOf(x.second); });
-      RadixSort(&lw, [&](const std::pair<double, double>& x) { return BitsOf(x.first); });
+      RadixSort(&lw, [&](const std::pair<double, double>& x) { return DoubleBits(x.second); });
+      RadixSort(&lw, [&](const std::pair<double, double>& x) { return DoubleBits(x.first); });
       for (const auto& [lum, weight] : lw)
         if (add(lum, weight)) break;
     }

@@ -457,12 +457,6 @@ namespace {
 // One step of the hash: the state xor a 64-bit word, through splitmix64.
 uint64_t Mix(uint64_t h, uint64_t w) { return SplitMix64(h ^ w); }
 
-uint64_t Bits(double d) {
-  uint64_t b;
-  std::memcpy(&b, &d, 8);
-  return b;
-}
-
 uint64_t Int(int v) { return uint64_t(uint32_t(v)); }
 
 }  // namespace
@@ -474,9 +468,9 @@ uint64_t MeshHash(const Mesh& mesh) {
   h = Mix(h, mesh.patches.size());
   h = Mix(h, mesh.faces.size());
   for (const auto& v : mesh.verts) {
-    h = Mix(h, Bits(v.x));
-    h = Mix(h, Bits(v.y));
-    h = Mix(h, Bits(v.z));
+    h = Mix(h, DoubleBits(v.x));
+    h = Mix(h, DoubleBits(v.y));
+    h = Mix(h, DoubleBits(v.z));
   }
   // A mesh that keeps columns only has its parents again from the children.
   std::vector<int32_t> parents;
@@ -493,15 +487,15 @@ uint64_t MeshHash(const Mesh& mesh) {
     h = Mix(h, Int(e.v[2]) | Int(e.v[3]) << 32);
     h = Mix(h, Int(e.patch) | Int(parent[i]) << 32);
     h = Mix(h, Int(e.first_child) | Int(e.level) << 32);
-    h = Mix(h, Bits(mesh.columns_only ? ElementArea(mesh, e) : mesh.elem_area[i]));
+    h = Mix(h, DoubleBits(mesh.columns_only ? ElementArea(mesh, e) : mesh.elem_area[i]));
   }
   for (size_t i = 0; i < mesh.patches.size(); ++i) {
     const Patch& p = mesh.patches[i];
     const glm::dvec3 c = mesh.Center(int(i));
     h = Mix(h, Int(p.face) | uint64_t(uint32_t(p.tops)) << 32);
-    h = Mix(h, Bits(c.x));
-    h = Mix(h, Bits(c.y));
-    h = Mix(h, Bits(c.z));
+    h = Mix(h, DoubleBits(c.x));
+    h = Mix(h, DoubleBits(c.y));
+    h = Mix(h, DoubleBits(c.z));
   }
   return h;
 }

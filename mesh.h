@@ -29,6 +29,7 @@
 
 #include <glm/glm.hpp>
 
+#include "coding.h"
 #include "hash.h"
 #include "scene.h"
 #include "surface.h"
@@ -131,12 +132,7 @@ struct FacePatchIds {
 // equal points: a face's shared grid points, coplanar faces' shading.
 // -0 and 0 hash alike, as they compare equal.
 struct PointHash {
-  static uint64_t Bits(double d) {
-    if (d == 0) d = 0;
-    uint64_t b;
-    std::memcpy(&b, &d, 8);
-    return b;
-  }
+  static uint64_t Bits(double d) { return DoubleBits(d == 0 ? 0.0 : d); }
   size_t operator()(const glm::dvec3& p) const {
     return SplitMix64(SplitMix64(SplitMix64(Bits(p.x)) ^ Bits(p.y)) ^ Bits(p.z));
   }
