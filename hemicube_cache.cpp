@@ -88,10 +88,8 @@ void Hemicube::BuildCache(const Mesh& mesh) {
     cf.normal = mf.normal;
     cf.offset = mf.offset;
     cf.lb = int(elem_.size());
-    for (int p : mesh.FacePatches(mf)) {
-      mesh.Leaves(p, &leaves);
-      elem_.insert(elem_.end(), leaves.begin(), leaves.end());
-    }
+    mesh.FaceLeaves(mf, &leaves);
+    elem_.insert(elem_.end(), leaves.begin(), leaves.end());
     cf.le = int(elem_.size());
     if (cf.le == cf.lb) continue;  // nothing to draw
     byface.push_back(cf);
@@ -220,13 +218,11 @@ bool Hemicube::UpdateCache(const Mesh& mesh) {
       elem.insert(elem.end(), elem_.begin() + cf.lb, elem_.begin() + cf.le);
       count.insert(count.end(), outline_n_.begin() + cf.lb, outline_n_.begin() + cf.le);
     } else {
-      for (int p : mesh.FacePatches(mesh.faces[size_t(cf.face)])) {
-        mesh.Leaves(p, &leaves);
-        for (int l : leaves) {
-          int vid[8];
-          elem.push_back(l);
-          count.push_back(uint8_t(Outline(mesh, l, vid)));
-        }
+      mesh.FaceLeaves(mesh.faces[size_t(cf.face)], &leaves);
+      for (int l : leaves) {
+        int vid[8];
+        elem.push_back(l);
+        count.push_back(uint8_t(Outline(mesh, l, vid)));
       }
     }
     le[size_t(j)] = int(elem.size());

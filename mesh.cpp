@@ -399,10 +399,10 @@ bool BuildMesh(const Scene& scene, std::vector<Surface>&& surfaces, const MeshOp
 
 namespace {
 
-// Depth first from the ids on `stack` (the last one first), children in order.
+// Depth first from the ids on `stack` (the last one first), children in
+// order, appended to *out.
 void CollectLeaves(const std::vector<Element>& elems, std::vector<int> stack,
                    std::vector<int>* out) {
-  out->clear();
   while (!stack.empty()) {
     int e = stack.back();
     stack.pop_back();
@@ -417,11 +417,21 @@ void CollectLeaves(const std::vector<Element>& elems, std::vector<int> stack,
 }  // namespace
 
 void Mesh::Leaves(int patch, std::vector<int>* out) const {
+  out->clear();
   const IdSpan tops = Tops(patch);
   CollectLeaves(elems, {std::make_reverse_iterator(tops.end()), std::make_reverse_iterator(tops.begin())}, out);
 }
 
+void Mesh::FaceLeaves(const MeshFace& f, std::vector<int>* out) const {
+  out->clear();
+  for (int p : FacePatches(f)) {
+    const IdSpan tops = Tops(p);
+    CollectLeaves(elems, {std::make_reverse_iterator(tops.end()), std::make_reverse_iterator(tops.begin())}, out);
+  }
+}
+
 void Mesh::LeavesUnder(int elem, std::vector<int>* out) const {
+  out->clear();
   CollectLeaves(elems, {elem}, out);
 }
 

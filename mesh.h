@@ -256,6 +256,8 @@ struct Mesh {
   }
   // Leaf elements of a patch, in a stable order.
   void Leaves(int patch, std::vector<int>* out) const;
+  // Leaf elements of a face: its patches' (FacePatches) in turn.
+  void FaceLeaves(const MeshFace& f, std::vector<int>* out) const;
   // Leaf elements under element `elem` (itself when it is a leaf).
   void LeavesUnder(int elem, std::vector<int>* out) const;
   const MeshFace& FaceOf(int elem) const { return faces[patches[elems[elem].patch].face]; }

@@ -51,12 +51,10 @@ std::vector<glm::dvec3> FaceRadiosity(const Mesh& mesh, const ElemB& elem_b) {
     if (scene_faces.size() == 1) {  // all its leaves, in patch order
       glm::dvec3 sum(0.0);
       double area = 0;
-      for (int p : mesh.FacePatches(mf)) {
-        mesh.Leaves(p, &leaves);
-        for (int e : leaves) {
-          sum += elem_b[e] * mesh.elem_area[size_t(e)];
-          area += mesh.elem_area[size_t(e)];
-        }
+      mesh.FaceLeaves(mf, &leaves);
+      for (int e : leaves) {
+        sum += elem_b[e] * mesh.elem_area[size_t(e)];
+        area += mesh.elem_area[size_t(e)];
       }
       if (area > 0) out[scene_faces[0]] = glm::max(sum / area, glm::dvec3(0.0));
       continue;
@@ -419,15 +417,11 @@ ShadedMesh Shade(const Mesh& mesh, const ElemB& elem_b) {
   // for every vertex of the mesh), its leaves in increasing id as a walk
   // over all leaves would add them, so the sums are the same bits.
   s.colors.resize(mesh.verts.size(), glm::vec3(0.0f));
-  std::vector<int> leaves, under;
+  std::vector<int> leaves;
   std::vector<glm::dvec3> sum;
   std::vector<double> w;
   for (const MeshFace& f : mesh.faces) {
-    leaves.clear();
-    for (int p : mesh.FacePatches(f)) {
-      mesh.Leaves(p, &under);
-      leaves.insert(leaves.end(), under.begin(), under.end());
-    }
+    mesh.FaceLeaves(f, &leaves);
     std::sort(leaves.begin(), leaves.end());
     const int own = f.vend - f.vbegin;
     const std::vector<int>& dv = mesh.DivideVerts(f);

@@ -14,10 +14,8 @@ namespace {
 double LeafArea(const Mesh& m, int face) {
   double a = 0;
   std::vector<int> leaves;
-  for (int p : m.FacePatches(m.faces[face])) {
-    m.Leaves(p, &leaves);
-    for (int e : leaves) a += m.elem_area[size_t(e)];
-  }
+  m.FaceLeaves(m.faces[face], &leaves);
+  for (int e : leaves) a += m.elem_area[size_t(e)];
   return a;
 }
 
@@ -146,6 +144,32 @@ TEST(Mesh, MeshHashSeesGeometryAndHierarchy) {
   moved.lo.x += 1;
   moved.hi.x += 1;
   EXPECT_NE(MeshHash(MakeMesh(moved)), h);
+}
+
+// A face's leaves are its patches' in turn, divided and split too, and
+// every leaf is one face's; each call replaces what the vector held.
+TEST(Mesh, FaceLeavesAreItsPatchesLeavesInTurn) {
+  MeshOptions o;
+  o.elements_per_patch = 2;
+  Mesh m = MakeMesh(Box(1.0, {glm::dvec3(0.5)}, {glm::dvec3(1.0)}), o);
+  Divide(&m, 0);
+  Divide(&m, m.elems[0].first_child + 2);
+  const int split = m.elems[0].patch;
+  ASSERT_GT(SplitPieces(m, split), 1);
+  SplitPatch(&m, split);
+  std::vector<int> got{-1}, want, leaves{-1};
+  size_t total = 0;
+  for (const MeshFace& f : m.faces) {
+    m.FaceLeaves(f, &got);
+    want.clear();
+    for (int p : m.FacePatches(f)) {
+      m.Leaves(p, &leaves);
+      want.insert(want.end(), leaves.begin(), leaves.end());
+    }
+    EXPECT_EQ(got, want);
+    total += got.size();
+  }
+  EXPECT_EQ(long(total), m.LeafCount());
 }
 
 }  // namespace
