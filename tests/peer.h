@@ -11,6 +11,7 @@
 
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -75,6 +76,22 @@ class Peer {
       in_.Append(buf, size_t(n));
     }
     if (payload) *payload = p;
+    return true;
+  }
+  // The next frame's assignments; false (the test failed) when it is not
+  // a work frame or does not decode.
+  bool NextWork(std::vector<proto::Assignment>* work) {
+    proto::Msg type;
+    std::string payload, err;
+    if (!Next(&type, &payload)) return false;
+    if (type != proto::Msg::kWork) {
+      ADD_FAILURE() << "frame of type " << int(type) << ", not work";
+      return false;
+    }
+    if (!proto::DecodeWork(payload, work, &err)) {
+      ADD_FAILURE() << err;
+      return false;
+    }
     return true;
   }
   // True when nothing at all is waiting to be read.

@@ -126,12 +126,8 @@ TEST_F(PoolTest, JoinsAfterHelloAndReadyThenTradesWorkForColumns) {
   pool_.Assign(0, {3, 2});
   ev.clear();
   pool_.Poll(0, &ev);  // writes the work frame
-  Msg type;
-  std::string payload, err;
-  ASSERT_TRUE(p.Next(&type, &payload));
-  ASSERT_EQ(type, Msg::kWork);
   std::vector<proto::Assignment> work;
-  ASSERT_TRUE(proto::DecodeWork(payload, &work, &err)) << err;
+  ASSERT_TRUE(p.NextWork(&work));
   ASSERT_EQ(work.size(), 1u);
   EXPECT_EQ(work[0].patch, 3);
   EXPECT_EQ(work[0].k, 2);
@@ -210,12 +206,8 @@ TEST_F(PoolTest, AnAssignmentToAWorkerLostBeforeTheMasterHeardIsDropped) {
   std::vector<WorkerEvent> ev;
   pool_.Poll(0, &ev);
   EXPECT_TRUE(ev.empty());
-  Msg type;
-  std::string payload, err;
   std::vector<proto::Assignment> work;
-  ASSERT_TRUE(alive.Next(&type, &payload));
-  ASSERT_EQ(type, Msg::kWork);
-  ASSERT_TRUE(proto::DecodeWork(payload, &work, &err)) << err;
+  ASSERT_TRUE(alive.NextWork(&work));
   ASSERT_EQ(work.size(), 1u);
   EXPECT_EQ(work[0].patch, 3);
 }

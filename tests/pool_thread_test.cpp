@@ -99,18 +99,14 @@ TEST_F(ThreadedPoolTest, OrdersGoOutInOrderAndColumnsComeBack) {
   std::string payload, err;
   std::vector<proto::Assignment> work;
   std::vector<int32_t> divided;
-  ASSERT_TRUE(peers[1].Next(&type, &payload));
-  ASSERT_EQ(type, Msg::kWork);
-  ASSERT_TRUE(proto::DecodeWork(payload, &work, &err)) << err;
+  ASSERT_TRUE(peers[1].NextWork(&work));
   ASSERT_EQ(work.size(), 1u);
   EXPECT_EQ(work[0].patch, 3);
   ASSERT_TRUE(peers[1].Next(&type, &payload));
   ASSERT_EQ(type, Msg::kDivide);
   ASSERT_TRUE(proto::DecodeDivide(payload, &divided, &err)) << err;
   EXPECT_EQ(divided, std::vector<int32_t>{5});
-  ASSERT_TRUE(peers[1].Next(&type, &payload));
-  ASSERT_EQ(type, Msg::kWork);
-  ASSERT_TRUE(proto::DecodeWork(payload, &work, &err)) << err;
+  ASSERT_TRUE(peers[1].NextWork(&work));
   EXPECT_EQ(work[0].patch, 4);
   EXPECT_EQ(work[0].k, 1);
   ASSERT_TRUE(peers[0].Next(&type));  // the division reaches every worker
@@ -180,12 +176,8 @@ TEST_F(ThreadedPoolTest, AnAssignmentToAWorkerLostMeanwhileIsDropped) {
   pool_->Assign(1, {3, 0});
   ev.clear();
   pool_->Send(&ev);
-  Msg type;
-  std::string payload, err;
   std::vector<proto::Assignment> work;
-  ASSERT_TRUE(peers[1].Next(&type, &payload));
-  ASSERT_EQ(type, Msg::kWork);
-  ASSERT_TRUE(proto::DecodeWork(payload, &work, &err)) << err;
+  ASSERT_TRUE(peers[1].NextWork(&work));
   ASSERT_EQ(work.size(), 1u);
   EXPECT_EQ(work[0].patch, 3);
 }
